@@ -1,0 +1,95 @@
+"""Measures behind the report's verdicts: topology, curve distances, spacing, speed of learning.
+
+Pure NumPy on plain arrays, so every verdict in REPORT.md can be recomputed and tested alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "grid_distances",
+    "topographic_error",
+    "nearest_is_neighbour",
+    "greedy_jumps",
+    "distance_to_polyline",
+    "spacing_cv",
+    "steps_to_level",
+    "spearman",
+]
+
+
+def grid_distances(grid: np.ndarray) -> np.ndarray:
+    """Chebyshev distances between units on a map grid: ``(n_units, 2) -> (n_units, n_units)``.
+
+    Two units are neighbours when this distance is 1 (the 8-neighbourhood on a 2-D grid).
+    """
+    grid = np.asarray(grid, dtype=float)
+    return np.abs(grid[:, None, :] - grid[None, :, :]).max(axis=-1)
+
+
+def topographic_error(weights: np.ndarray, grid: np.ndarray, samples: np.ndarray) -> float:
+    """Fraction of samples whose best and second-best units are not grid neighbours.
+
+    Args:
+      weights: ``(n_units, dim)`` map weights. grid: ``(n_units, 2)``. samples: ``(n, dim)``.
+    """
+    d = ((samples[:, None, :] - weights[None, :, :]) ** 2).sum(axis=-1)
+    order = np.argsort(d, axis=1)[:, :2]
+    return float((grid_distances(grid)[order[:, 0], order[:, 1]] > 1).mean())
+
+
+def nearest_is_neighbour(weights: np.ndarray, grid: np.ndarray) -> float:
+    """Fraction of units whose nearest other unit in weight space is a grid neighbour."""
+    d = ((weights[:, None, :] - weights[None, :, :]) ** 2).sum(axis=-1)
+    np.fill_diagonal(d, np.inf)
+    nearest = d.argmin(axis=1)
+    return float((grid_distances(grid)[np.arange(len(weights)), nearest] <= 1).mean())
+
+
+def greedy_jumps(greedy: np.ndarray, input_grid: np.ndarray, action_grid: np.ndarray) -> np.ndarray:
+    """Grid distance between the greedy action units of every pair of neighbouring input units.
+
+    Args:
+      greedy: ``(n_input_units,)`` greedy action unit of each input unit.
+
+    Returns:
+      ``(n_pairs,)`` action-grid distances (0 or 1 where the Q-table keeps topology).
+    """
+    neighbours = np.argwhere(np.triu(grid_distances(input_grid) == 1))
+    action_d = grid_distances(action_grid)
+    return action_d[greedy[neighbours[:, 0]], greedy[neighbours[:, 1]]]
+
+
+def distance_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """Euclidean distance of each point to a polyline: ``(n, 2), (m, 2) -> (n,)``.
+
+    NaN rows of the polyline split it into separate pieces (no segment spans a NaN).
+    """
+    a, b = polyline[:-1], polyline[1:]
+    keep = np.isfinite(a).all(axis=1) & np.isfinite(b).all(axis=1)
+    a, b = a[keep], b[keep]
+    ab = b - a
+    length2 = np.maximum((ab**2).sum(axis=1), 1e-300)
+    s = np.clip(((points[:, None, :] - a[None]) * ab[None]).sum(axis=-1) / length2, 0.0, 1.0)
+    closest = a[None] + s[..., None] * ab[None]
+    return np.sqrt(((points[:, None, :] - closest) ** 2).sum(axis=-1)).min(axis=1)
+
+
+def spacing_cv(values: np.ndarray) -> float:
+    """Coefficient of variation (sd / mean) of the gaps between sorted values."""
+    gaps = np.diff(np.sort(np.asarray(values, dtype=float).ravel()))
+    return float(gaps.std() / gaps.mean()) if gaps.size and gaps.mean() > 0 else float("nan")
+
+
+def steps_to_level(steps: np.ndarray, error: np.ndarray, level: float) -> float:
+    """First step at which an error curve is at or below ``level`` (NaN if it never is)."""
+    hits = np.flatnonzero(np.asarray(error) <= level)
+    return float(steps[hits[0]]) if hits.size else float("nan")
+
+
+def spearman(x: np.ndarray, y: np.ndarray) -> float:
+    """Spearman rank correlation of two 1-D samples (ties ranked by order, fine for continuous data)."""
+    rx = np.argsort(np.argsort(x)).astype(float)
+    ry = np.argsort(np.argsort(y)).astype(float)
+    return float(np.corrcoef(rx, ry)[0, 1])
