@@ -1,0 +1,135 @@
+"""Compiled SOM-Q steps (numba), looping over trials; the random numbers come in from NumPy.
+
+These kernels are the fast path of ``somarm.somq.SOMQ``. They do the same arithmetic in the
+same order as ``somarm.reference.ReferenceSOMQ`` (no fastmath), so both give bit-identical
+results. Units whose neighbourhood value is 0 are skipped: their update would add exactly 0.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+__all__ = ["act_kernel", "learn_kernel"]
+
+_TWO_PI = 2.0 * math.pi
+
+
+@numba.njit(cache=True)
+def _winner(x, weights):
+    best = np.inf
+    j = 0
+    for m in range(weights.shape[0]):
+        total = 0.0
+        for i in range(x.shape[0]):
+            diff = x[i] - weights[m, i]
+            total += diff * diff
+        if total < best:
+            best = total
+            j = m
+    return j
+
+
+@numba.njit(cache=True)
+def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high,
+               gaussian, winners, units, actions):
+    """Steps 1 to 5 for every trial; fills ``winners``, ``units`` and ``actions`` in place.
+
+    Shapes: observations ``(n_trials, obs_dim)``, input_weights ``(n_trials, n_s, obs_dim)``,
+    action_weights ``(n_trials, n_a, action_dim)``, q ``(n_trials, n_s, n_a)``, rows
+    ``(n_trials, width)``, low/high ``(action_dim,)``, winners/units ``(n_trials,)``, actions
+    ``(n_trials, action_dim)``.
+    """
+    n_a = q.shape[2]
+    for trial in range(observations.shape[0]):
+        row = rows[trial]
+        j = _winner(observations[trial], input_weights[trial])
+        if row[0] < p:
+            k = min(int(row[1] * n_a), n_a - 1)
+        else:
+            top = q[trial, j, 0]
+            for n in range(1, n_a):
+                if q[trial, j, n] > top:
+                    top = q[trial, j, n]
+            n_tied = 0
+            for n in range(n_a):
+                if q[trial, j, n] == top:
+                    n_tied += 1
+            pick = min(int(row[2] * n_tied), n_tied - 1)
+            k = 0
+            for n in range(n_a):
+                if q[trial, j, n] == top:
+                    if pick == 0:
+                        k = n
+                        break
+                    pick -= 1
+        for i in range(actions.shape[1]):
+            if gaussian:
+                u1 = row[3 + 2 * i]
+                u2 = row[4 + 2 * i]
+                noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(_TWO_PI * u2)
+            else:
+                noise = 2.0 * row[3 + i] - 1.0
+            value = action_weights[trial, k, i] + noise * epsilon
+            actions[trial, i] = min(max(value, low[i]), high[i])
+        winners[trial] = j
+        units[trial] = k
+
+
+@numba.njit(cache=True)
+def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, winners, units, actions,
+                 input_weights, action_weights, q, alpha, lambda_s, lambda_a, n_s, n_a,
+                 distances_s, distances_a, neighbourhood_q):
+    """Steps 6 to 9 for every trial, in place on the maps and the Q-table.
+
+    ``bootstrap[trial]`` says whether to add ``gamma * max_i Q(s'_j, a_i)`` (s'_j the winner of
+    ``next_observations[trial]`` before this step's input-map update).
+    """
+    n_units_s = q.shape[1]
+    n_units_a = q.shape[2]
+    psi_s = np.empty(n_units_s)
+    psi_a = np.empty(n_units_a)
+    for trial in range(rewards.shape[0]):
+        j = winners[trial]
+        k = units[trial]
+        target = rewards[trial]
+        if bootstrap[trial]:
+            j_next = _winner(next_observations[trial], input_weights[trial])
+            top = q[trial, j_next, 0]
+            for n in range(1, n_units_a):
+                if q[trial, j_next, n] > top:
+                    top = q[trial, j_next, n]
+            target = target + gamma * top
+        for m in range(n_units_s):
+            psi_s[m] = max(0.0, 1.0 - distances_s[j, m] / (n_s + 1.0))
+        for n in range(n_units_a):
+            psi_a[n] = max(0.0, 1.0 - distances_a[k, n] / (n_a + 1.0))
+        # Step 7: the action map learns only if the perturbed action looks like an improvement.
+        if target > q[trial, j, k]:
+            for m in range(n_units_a):
+                if psi_a[m] > 0.0:
+                    rate = lambda_a * psi_a[m]
+                    for i in range(actions.shape[1]):
+                        w = action_weights[trial, m, i]
+                        action_weights[trial, m, i] = w + rate * (actions[trial, i] - w)
+        # Step 8: neighbourhood Q-learning, or the winning pair alone.
+        if neighbourhood_q:
+            for m in range(n_units_s):
+                if psi_s[m] > 0.0:
+                    a_m = alpha * psi_s[m]
+                    for n in range(n_units_a):
+                        if psi_a[n] > 0.0:
+                            value = q[trial, m, n]
+                            q[trial, m, n] = value + a_m * psi_a[n] * (target - value)
+        else:
+            value = q[trial, j, k]
+            q[trial, j, k] = value + alpha * (target - value)
+        # Step 9: the input map moves towards the observation.
+        for m in range(n_units_s):
+            if psi_s[m] > 0.0:
+                rate = lambda_s * psi_s[m]
+                for i in range(observations.shape[1]):
+                    w = input_weights[trial, m, i]
+                    input_weights[trial, m, i] = w + rate * (observations[trial, i] - w)

@@ -1,0 +1,135 @@
+"""SOM-Q for one trial, written step by step as in section 4 of the paper (kept for tests and readers).
+
+This is the slow, plain version the batched, compiled learner (``somarm.somq.SOMQ``) is tested
+against: given the same seed and trial index it must produce bit-identical maps, Q-table and
+actions. It draws exactly the same random numbers in exactly the same way: one row per step
+from the trial's ``UniformStreams`` row, laid out as
+
+    [explore?, random unit, tie-break, noise for each action dimension]
+
+(two noise numbers per dimension for Gaussian noise). Sums and products are written in the
+same order as the kernel so that floating point rounds the same way.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .learners import initial_generator
+from .som import grid_coordinates, grid_distances, neighbourhood
+from .somq import SOMQConfig, row_width
+from .streams import UniformStreams, trial_ids_for
+from .validation import check_array, check_bounds
+
+__all__ = ["ReferenceSOMQ"]
+
+
+class ReferenceSOMQ:
+    """One SOM-Q agent, step by step. Same constructor keywords as ``SOMQ`` but a single trial.
+
+    Args:
+      config: the learner's parameters.
+      observation_low, observation_high: the observation box ``(obs_dim,)``.
+      action_low, action_high: the action box ``(action_dim,)``; perturbed actions are kept inside.
+      seed: the run's seed.
+      trial_id: which trial of the run this agent is (its random stream).
+    """
+
+    def __init__(self, config: SOMQConfig, *, observation_low, observation_high, action_low, action_high,
+                 seed: int = 0, trial_id: int = 0):
+        self.config = config
+        self.observation_low, self.observation_high = check_bounds("observation", observation_low,
+                                                                   observation_high)
+        self.action_low, self.action_high = check_bounds("action", action_low, action_high)
+        ids = trial_ids_for(1, [trial_id])
+        self.streams = UniformStreams(seed, ids, "learner", row_width(config, self.action_low.size))
+        self.distances_s = grid_distances(grid_coordinates(config.input_shape))
+        self.distances_a = grid_distances(grid_coordinates(config.action_shape))
+        n_s, n_a = self.distances_s.shape[0], self.distances_a.shape[0]
+        # Table 1: Q zero, action weights evenly in the action bounds, input weights in a range.
+        rng = initial_generator(seed, int(ids[0]))
+        low, high = self.observation_low, self.observation_high
+        if config.input_init is not None:
+            low, high = np.full_like(low, config.input_init[0]), np.full_like(high, config.input_init[1])
+        self.input_weights = low + (high - low) * rng.random((n_s, low.size))
+        span = self.action_high - self.action_low
+        self.action_weights = self.action_low + span * rng.random((n_a, self.action_low.size))
+        self.q = np.zeros((n_s, n_a))
+        self.t = 0
+
+    def act(self, observation) -> np.ndarray:
+        """Steps 1 to 5 for one observation ``(obs_dim,)``; returns the perturbed action."""
+        cfg, t = self.config, self.t
+        x = check_array("observation", observation, (self.observation_low.size,))
+        row = self.streams.next()[0]
+        # Step 1: the input unit nearest to the observation (squared Euclidean distance).
+        best, j = math.inf, 0
+        for m in range(self.input_weights.shape[0]):
+            total = 0.0
+            for i in range(x.size):
+                diff = x[i] - self.input_weights[m, i]
+                total += diff * diff
+            if total < best:
+                best, j = total, m
+        # Step 2: a random action unit with probability p, else the best Q for s_j (ties at random).
+        n_a = self.q.shape[1]
+        if row[0] < cfg.p.value(t):
+            k = min(int(row[1] * n_a), n_a - 1)
+        else:
+            top = self.q[j].max()
+            tied = [n for n in range(n_a) if self.q[j, n] == top]
+            k = tied[min(int(row[2] * len(tied)), len(tied) - 1)]
+        # Step 3: the proposed action is a COPY of unit a_k's weights.
+        proposed = self.action_weights[k].copy()
+        # Step 4: perturb each element by random(-1, 1) * epsilon (or Gaussian * epsilon) and keep
+        # the result inside the action bounds.
+        epsilon = cfg.epsilon.value(t)
+        perturbed = np.empty_like(proposed)
+        for i in range(proposed.size):
+            if cfg.noise == "gaussian":
+                u1, u2 = row[3 + 2 * i], row[4 + 2 * i]
+                noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(2.0 * math.pi * u2)
+            else:
+                noise = 2.0 * row[3 + i] - 1.0
+            value = proposed[i] + noise * epsilon
+            perturbed[i] = min(max(value, self.action_low[i]), self.action_high[i])
+        self._last = (x, j, k, perturbed)
+        # Step 5: output the perturbed action.
+        return perturbed.copy()
+
+    def learn(self, reward: float, next_observation=None, terminal: bool = True) -> None:
+        """Steps 6 to 10 for the reward that followed the last ``act``."""
+        cfg, t = self.config, self.t
+        x, j, k, perturbed = self._last
+        # Step 6 (the reward) and the corrected return r + gamma * max_i Q(s'_j, a_i).
+        target = float(reward)
+        if cfg.gamma > 0.0 and not terminal:
+            x_next = check_array("next_observation", next_observation, (x.size,))
+            best, j_next = math.inf, 0
+            for m in range(self.input_weights.shape[0]):
+                total = 0.0
+                for i in range(x_next.size):
+                    diff = x_next[i] - self.input_weights[m, i]
+                    total += diff * diff
+                if total < best:
+                    best, j_next = total, m
+            target = target + cfg.gamma * self.q[j_next].max()
+        # Step 7: move the action map towards the perturbed action only if it looks better.
+        if target > self.q[j, k]:
+            rates = cfg.lambda_a.value(t) * neighbourhood(self.distances_a[k], cfg.n_a.value(t))
+            self.action_weights += rates[:, None] * (perturbed - self.action_weights)
+        # Step 8: neighbourhood Q-learning (or only the winning pair, -NL).
+        alpha = cfg.alpha.value(t)
+        psi_s = neighbourhood(self.distances_s[j], cfg.n_s.value(t))
+        if cfg.neighbourhood_q:
+            psi_a = neighbourhood(self.distances_a[k], cfg.n_a.value(t))
+            self.q += (alpha * psi_s)[:, None] * psi_a[None, :] * (target - self.q)
+        else:
+            self.q[j, k] = self.q[j, k] + alpha * (target - self.q[j, k])
+        # Step 9: move the input map towards the observation.
+        rates = cfg.lambda_s.value(t) * psi_s
+        self.input_weights += rates[:, None] * (x - self.input_weights)
+        # Step 10: the next step.
+        self.t += 1

@@ -1,0 +1,207 @@
+"""SOM-Q (Smith 2002, section 4): an input SOM, an action SOM and a Q-table between them.
+
+Batched over independent trials: ``input_weights (n_trials, n_input_units, obs_dim)``,
+``action_weights (n_trials, n_action_units, action_dim)``, ``q (n_trials, n_input_units,
+n_action_units)``; one agent is ``n_trials == 1``. The learner knows only the observation and
+action boxes, observations, actions and rewards. Rules where the paper is brief:
+
+- t counts learning steps from 0; ``act`` and ``learn`` of one step read all seven schedules
+  at the same t, and ``learn`` advances it.
+- the perturbed action is a copy of the chosen unit's weights plus noise, clipped to the action
+  bounds (the algorithm's "keep inside"); bad observations and rewards are rejected, never clipped.
+- delayed reward (gamma > 0): s'_j is the winner of the next observation before this step's
+  input-map update; terminal trials use the reward alone.
+- ``predict`` is greedy: the best Q for the winning input unit, ties to the lowest index, no
+  random number drawn and nothing learned.
+- random numbers: one row per step per trial, ``[explore?, random unit, tie-break, noise x
+  action_dim]`` (two per dimension for Gaussian noise, Box-Muller); the initial weights come
+  from a separate child stream of the trial's learner seed (``learners.initial_generator``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from . import _kernels
+from .learners import LearnerBase, config_from_dict, config_to_dict, override_config, validate_common
+from .schedules import InverseDecay, Schedule
+from .som import winners
+
+__all__ = ["SOMQConfig", "SOMQ", "row_width"]
+
+_F1 = InverseDecay(1000.0)
+
+
+@dataclass(frozen=True)
+class SOMQConfig:
+    """Everything that defines a SOM-Q learner; the defaults are Table 1's (reach2, Fig. 7)."""
+
+    input_shape: tuple[int, ...] = (50,)
+    """Input map grid: ``(n,)`` for a line or ``(rows, cols)`` for a rectangle."""
+    action_shape: tuple[int, ...] = (50,)
+    """Action map grid, as ``input_shape``."""
+    alpha: Schedule = Schedule(1.0, _F1)
+    """Q-learning rate."""
+    lambda_s: Schedule = Schedule(1.0, _F1)
+    """Learning rate of the input map."""
+    lambda_a: Schedule = Schedule(1.0, _F1)
+    """Learning rate of the action map."""
+    n_s: Schedule = Schedule(20.0, _F1)
+    """Input map neighbourhood size N_S (grid units; 0 = the winner alone)."""
+    n_a: Schedule = Schedule(20.0, _F1)
+    """Action map neighbourhood size N_A."""
+    p: Schedule = Schedule(1.0, _F1)
+    """Probability of choosing a random action unit (Q-learning exploration), in [0, 1]."""
+    epsilon: Schedule = Schedule(0.1, _F1)
+    """Largest perturbation of each action element (the standard deviation for Gaussian noise)."""
+    gamma: float = 0.0
+    """Discount in [0, 1]; 0 is the immediate reward of all the paper's experiments."""
+    neighbourhood_q: bool = True
+    """Neighbourhood Q-learning (+NL); False updates only the winning pair (-NL)."""
+    noise: Literal["uniform", "gaussian"] = "uniform"
+    """Perturbation: ``uniform`` random(-1, 1) x epsilon (the paper's), or ``gaussian`` N(0, 1) x epsilon."""
+    input_init: tuple[float, float] | None = None
+    """Range of the initial input weights in every dimension; None = the observation bounds."""
+
+    SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
+
+    def __post_init__(self) -> None:
+        validate_common(self, probabilities=("p",))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form; ``from_dict`` gives back an equal config."""
+        return config_to_dict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> SOMQConfig:
+        """Inverse of ``to_dict``. Raises ValueError naming a bad or unknown field."""
+        return config_from_dict(cls, d)
+
+    def with_overrides(self, overrides: dict[str, str]) -> SOMQConfig:
+        """A copy with command-line ``key=value`` strings applied, e.g. ``{"decay": "exp:0.9985"}``.
+
+        Keys: ``decay`` (``inv:TAU``, ``exp:C`` or ``const``, for every schedule), ``<param>`` or
+        ``<param>.scale`` (a number), ``<param>.floor``, ``<param>.decay`` for each schedule,
+        ``input_shape``/``action_shape`` (``50`` or ``10x10``), ``gamma``, ``neighbourhood_q``
+        (true|false), ``noise`` (uniform|gaussian), ``input_init`` (``LOW:HIGH`` or ``none``).
+
+        Raises:
+          ValueError: one line naming the bad key or value and listing the allowed keys.
+        """
+        return override_config(self, overrides)
+
+
+def row_width(config: SOMQConfig, action_dim: int) -> int:
+    """Random numbers per step per trial: explore?, random unit, tie-break, then the noise."""
+    return 3 + action_dim * (2 if config.noise == "gaussian" else 1)
+
+
+class SOMQ(LearnerBase):
+    """SOM-Q for ``n_trials`` independent trials (conforms to ``somarm.protocols.Learner``).
+
+    Args:
+      config: a ``SOMQConfig``.
+      observation_low, observation_high: the observation box, ``(obs_dim,)`` each.
+      action_low, action_high: the action box, ``(action_dim,)`` each; low < high.
+      n_trials: independent trials advanced together (>= 1).
+      seed: the run's seed; trial i's numbers depend only on (seed, trial_ids[i]).
+      trial_ids: which trials of the run these are (default ``range(n_trials)``); ``[7]``
+        replays trial 7 of a batch alone.
+
+    Raises:
+      ValueError: a bad config, bounds, ``n_trials``, ``seed`` or ``trial_ids`` (one line).
+    """
+
+    kind = "somq"
+    config_class = SOMQConfig
+
+    def _build(self) -> None:
+        cfg = self.config
+        self.action_grid, self._distances_a = self._grid(cfg.action_shape)
+        n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
+        self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
+        for trial, rng in enumerate(self._initial_generators()):
+            # Table 1 order: input weights first, then action weights, from one child stream.
+            self.input_weights[trial] = self._initial_input_weights(rng)
+            span = self.action_high - self.action_low
+            self.action_weights[trial] = self.action_low + span * rng.random((n_a, self.action_dim))
+        self.q = np.zeros((self.n_trials, n_s, n_a))
+        self._open_streams(row_width(cfg, self.action_dim))
+
+    _STATE_ARRAYS = ("input_weights", "action_weights", "q")
+
+    def act(self, observations) -> np.ndarray:
+        """Steps 1 to 5: an exploring action per trial.
+
+        Args:
+          observations: ``(n_trials, obs_dim)``, finite.
+
+        Returns:
+          Perturbed actions ``(n_trials, action_dim)`` inside the action bounds (a fresh array).
+
+        Raises:
+          ValueError: wrong shape, NaN or inf.
+        """
+        x = self._check_observations(observations)
+        rows = self._streams.next()
+        values = self.parameters()
+        self._observations[...] = x
+        _kernels.act_kernel(
+            self._observations, self.input_weights, self.action_weights, self.q, rows,
+            values["p"], values["epsilon"], self.action_low, self.action_high,
+            self.config.noise == "gaussian", self._winners, self._units, self._actions,
+        )
+        self._pending = True
+        return self._actions.copy()
+
+    def learn(self, rewards, next_observations=None, terminal: bool | np.ndarray = True) -> None:
+        """Steps 6 to 10 for the rewards that followed the last ``act``.
+
+        Args:
+          rewards: ``(n_trials,)``, finite.
+          next_observations: ``(n_trials, obs_dim)``; needed when gamma > 0 and a trial is not terminal.
+          terminal: bool, or ``(n_trials,)`` bools; terminal trials do not bootstrap.
+
+        Raises:
+          ValueError: no ``act`` before, bad shapes, NaN or inf, or a missing ``next_observations``.
+        """
+        r, bootstrap, x_next = self._check_learn(rewards, next_observations, terminal)
+        values = self.parameters()
+        _kernels.learn_kernel(
+            r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
+            self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
+            values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
+            self._distances_s, self._distances_a, self.config.neighbourhood_q,
+        )
+        self._pending = False
+        self.t += 1
+
+    def greedy_units(self, observations) -> tuple[np.ndarray, np.ndarray]:
+        """The winning input unit and its best action unit (ties to the lowest index).
+
+        Args:
+          observations: ``(n_trials, obs_dim)`` or ``(n_trials, n_obs, obs_dim)``.
+
+        Returns:
+          ``(input_winners, action_units)``, each of the leading shape of ``observations``.
+        """
+        x = self._check_observations(observations, allow_many=True)
+        input_winners = winners(self.input_weights, x)
+        index = np.arange(self.n_trials).reshape((-1,) + (1,) * (input_winners.ndim - 1))
+        return input_winners, np.argmax(self.q[index, input_winners], axis=-1)
+
+    def predict(self, observations) -> np.ndarray:
+        """Greedy actions, no exploration, no learning, no random number drawn.
+
+        Args:
+          observations: ``(n_trials, obs_dim)`` or ``(n_trials, n_obs, obs_dim)``.
+
+        Returns:
+          ``(n_trials, action_dim)`` or ``(n_trials, n_obs, action_dim)``.
+        """
+        _, units = self.greedy_units(observations)
+        index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))
+        return self.action_weights[index, units]
