@@ -1,0 +1,167 @@
+"""The meshcat server process: meshcat's zmq-to-websocket bridge, bound where we say.
+
+Run as ``python -m somarm.viewer._bridge --host H --port P --ready-file F --parent-pid N``
+by ``somarm.viewer.server``. It differs from ``meshcat-server`` where that one has defects:
+
+- the web server listens on ``--host`` only (meshcat's listens on every interface), and the
+  zmq socket on 127.0.0.1 only;
+- the port may be 0 (the system picks a free one), reported through ``--ready-file``
+  instead of stdout, so the parent never has to keep reading a pipe;
+- nothing is printed per browser connection (meshcat's prints two lines each, which froze
+  it once an unread pipe filled up);
+- a ``batch`` request carries many commands in one round trip (a live frame of the
+  20-link arm is about 25 commands);
+- ``wait`` is answered through the zmq stream (meshcat answers on the bare socket, after
+  which the stream misses the next request and the caller hangs);
+- it exits by itself when its parent dies, so a killed training run leaves no orphan.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+import tornado.httpserver
+import tornado.ioloop
+import tornado.netutil
+import tornado.web
+import zmq
+from meshcat.servers.tree import SceneTree, find_node
+from meshcat.servers.zmqserver import (
+    MESHCAT_COMMANDS,
+    VIEWER_HTML,
+    VIEWER_ROOT,
+    StaticFileHandlerNoCache,
+    WebSocketHandler,
+    ZMQWebSocketBridge,
+)
+
+__all__ = ["LoopbackBridge", "main"]
+
+_PARENT_CHECK_MS = 500
+
+
+class _QuietWebSocketHandler(WebSocketHandler):
+    """meshcat's websocket handler without the per-connection prints."""
+
+    def open(self):
+        self.bridge.websocket_pool.add(self)
+        self.bridge.send_scene(self)
+
+    def on_close(self):
+        self.bridge.websocket_pool.discard(self)
+
+
+class LoopbackBridge(ZMQWebSocketBridge):
+    """meshcat's bridge with the web server bound to ``host`` and zmq bound to 127.0.0.1."""
+
+    def __init__(self, host: str, port: int) -> None:  # noqa: D107 - meshcat's __init__ binds everywhere
+        self.host = host
+        self.websocket_pool = set()
+        self.app = self.make_app()
+        self.ioloop = tornado.ioloop.IOLoop.current()
+        self.zmq_socket, self.zmq_stream, _ = self.setup_zmq("tcp://127.0.0.1:*")
+        self.zmq_url = self.zmq_socket.getsockopt(zmq.LAST_ENDPOINT).decode()
+        sockets = tornado.netutil.bind_sockets(port, address=host)
+        server = tornado.httpserver.HTTPServer(self.app)
+        server.add_sockets(sockets)
+        self.fileserver_port = sockets[0].getsockname()[1]
+        url_host = f"[{host}]" if ":" in host else host
+        self.web_url = f"http://{url_host}:{self.fileserver_port}/static/"
+        self.tree = SceneTree()
+
+    def make_app(self):
+        return tornado.web.Application([
+            (r"/static/(.*)", StaticFileHandlerNoCache, {"path": VIEWER_ROOT, "default_filename": VIEWER_HTML}),
+            (r"/", _QuietWebSocketHandler, {"bridge": self}),
+        ])
+
+    def handle_zmq(self, frames):
+        command = frames[0]
+        if command == b"batch":
+            self._apply_batch(frames[1:])
+        elif command == b"n_clients":
+            self.zmq_stream.send(str(len(self.websocket_pool)).encode())
+        elif command == b"wait":
+            self._reply_when_connected()
+        else:
+            super().handle_zmq(frames)
+
+    def _apply_batch(self, frames):
+        """Apply (type, path, data) triples as one request: one round trip per frame, not per command."""
+        if len(frames) % 3:
+            self.zmq_stream.send(b"error: a batch is (type, path, data) triples")
+            return
+        for k in range(0, len(frames), 3):
+            kind, path_bytes, data = frames[k : k + 3]
+            if kind.decode() not in MESHCAT_COMMANDS:
+                continue
+            for websocket in self.websocket_pool:
+                websocket.write_message(data, binary=True)
+            path = [p for p in path_bytes.decode().split("/") if p]
+            self._remember(kind.decode(), path, data)
+        self.zmq_stream.send(b"ok")
+
+    def _remember(self, kind, path, data):
+        """Keep the scene tree current, as meshcat's server does, for browsers that connect later."""
+        node = find_node(self.tree, path)
+        if kind == "set_transform":
+            node.transform = data
+        elif kind == "set_object":
+            node.object = data
+            node.properties = []
+        elif kind == "set_property":
+            node.properties.append(data)
+        elif kind == "set_animation":
+            node.animation = data
+        elif kind == "delete":
+            if path:
+                parent = find_node(self.tree, path[:-1])
+                if path[-1] in parent:
+                    del parent[path[-1]]
+            else:
+                self.tree = SceneTree()
+
+    def _reply_when_connected(self):
+        if self.websocket_pool:
+            self.zmq_stream.send(b"ok")
+        else:
+            self.ioloop.call_later(0.1, self._reply_when_connected)
+
+    def watch_parent(self, parent_pid: int) -> None:
+        """Stop the loop once ``parent_pid`` is gone (we were re-parented)."""
+
+        def check():
+            if os.getppid() != parent_pid:
+                self.ioloop.stop()
+
+        tornado.ioloop.PeriodicCallback(check, _PARENT_CHECK_MS).start()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Start the bridge, write its addresses to the ready file, serve until stopped."""
+    parser = argparse.ArgumentParser(prog="somarm.viewer._bridge")
+    parser.add_argument("--host", default="127.0.0.1")
+    parser.add_argument("--port", type=int, default=0)
+    parser.add_argument("--ready-file", required=True)
+    parser.add_argument("--parent-pid", type=int, default=None)
+    args = parser.parse_args(argv)
+    bridge = LoopbackBridge(args.host, args.port)
+    if args.parent_pid is not None:
+        bridge.watch_parent(args.parent_pid)
+    ready = {"zmq_url": bridge.zmq_url, "web_url": bridge.web_url, "port": bridge.fileserver_port}
+    tmp = args.ready_file + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as handle:
+        json.dump(ready, handle)
+    os.replace(tmp, args.ready_file)  # the parent sees the whole file or none
+    try:
+        bridge.run()
+    except KeyboardInterrupt:
+        pass
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

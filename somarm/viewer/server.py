@@ -1,0 +1,146 @@
+"""Start and stop a meshcat server bound to one host, and never leave it orphaned.
+
+The server runs as a child process (``somarm.viewer._bridge``); its output goes to a log
+file, never to a pipe someone must keep reading. It is stopped by ``stop()``, by the
+context manager, at interpreter exit, on SIGTERM and Ctrl-C (``stop_on_signals``), and
+by itself when its parent dies.
+"""
+
+from __future__ import annotations
+
+import atexit
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+from somarm.validation import check_int, check_number
+
+__all__ = ["MeshcatServer", "stop_on_signals"]
+
+_STOP_GRACE_S = 3.0
+
+
+class MeshcatServer:
+    """A meshcat server (web page + zmq command socket) in a child process.
+
+    Args:
+      host: address the web page listens on. 127.0.0.1 (this machine only) unless you
+        mean to share the viewer; the zmq command socket is always on 127.0.0.1.
+      port: web port; None lets the system pick a free one.
+      start_timeout_s: how long to wait for the server to come up.
+
+    Attributes (after ``start``):
+      web_url: the page to open, e.g. ``http://127.0.0.1:7001/static/``.
+      zmq_url: where commands go.
+      port: the web port actually bound.
+    """
+
+    def __init__(self, *, host: str = "127.0.0.1", port: int | None = None, start_timeout_s: float = 30.0):
+        if not isinstance(host, str) or not host:
+            raise ValueError(f"host must be a non-empty address string, got {host!r}")
+        self.host = host
+        self.requested_port = 0 if port is None else check_int("port", port, minimum=0)
+        if self.requested_port > 65535:
+            raise ValueError(f"port must be in 0..65535, got {port!r}")
+        self.start_timeout_s = check_number("start_timeout_s", start_timeout_s, minimum=0, strict_minimum=True)
+        self.web_url: str | None = None
+        self.zmq_url: str | None = None
+        self.port: int | None = None
+        self.process: subprocess.Popen | None = None
+        self._folder: tempfile.TemporaryDirectory | None = None
+        self._lock = threading.Lock()
+
+    @property
+    def log_path(self) -> Path | None:
+        """The server's stdout/stderr log (kept until ``stop``)."""
+        return None if self._folder is None else Path(self._folder.name) / "server.log"
+
+    def start(self) -> MeshcatServer:
+        """Start the child process and wait until it reports its addresses.
+
+        Raises:
+          RuntimeError: the server exited early (e.g. port taken) or did not come up in time;
+            the message holds the end of its log.
+        """
+        if self.process is not None:
+            return self
+        self._folder = tempfile.TemporaryDirectory(prefix="somarm-meshcat-")
+        ready_file = Path(self._folder.name) / "ready.json"
+        log = open(self.log_path, "wb")  # noqa: SIM115 - the child owns it from here
+        command = [
+            sys.executable, "-m", "somarm.viewer._bridge", "--host", self.host,
+            "--port", str(self.requested_port), "--ready-file", str(ready_file),
+            "--parent-pid", str(os.getpid()),
+        ]
+        # Own session: a Ctrl-C in the terminal reaches us, and we stop the server in order.
+        self.process = subprocess.Popen(
+            command, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
+        )
+        log.close()
+        atexit.register(self.stop)
+        deadline = time.monotonic() + self.start_timeout_s
+        while not ready_file.exists():
+            if self.process.poll() is not None or time.monotonic() > deadline:
+                tail = self.log_path.read_text(errors="replace")[-2000:]
+                self.stop()
+                raise RuntimeError(f"meshcat server on {self.host}:{self.requested_port} did not start: {tail}")
+            time.sleep(0.02)
+        ready = json.loads(ready_file.read_text())
+        self.web_url, self.zmq_url, self.port = ready["web_url"], ready["zmq_url"], int(ready["port"])
+        return self
+
+    def alive(self) -> bool:
+        """True while the child process runs."""
+        return self.process is not None and self.process.poll() is None
+
+    def stop(self) -> None:
+        """Terminate the server (kill it if it does not go within a few seconds). Idempotent."""
+        with self._lock:
+            process, self.process = self.process, None
+            if process is not None and process.poll() is None:
+                process.terminate()
+                try:
+                    process.wait(timeout=_STOP_GRACE_S)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    process.wait(timeout=_STOP_GRACE_S)
+            if self._folder is not None:
+                self._folder.cleanup()
+                self._folder = None
+        atexit.unregister(self.stop)
+
+    def __enter__(self) -> MeshcatServer:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def __repr__(self) -> str:
+        state = "running" if self.alive() else "stopped"
+        return f"MeshcatServer(host={self.host!r}, port={self.port}, {state})"
+
+
+def stop_on_signals(server: MeshcatServer) -> None:
+    """On SIGTERM stop ``server`` and exit with status 143, after any earlier handler.
+
+    Ctrl-C raises KeyboardInterrupt as usual; callers stop the server in ``finally`` (and
+    ``atexit`` does it otherwise). Only the main thread may install handlers, so from any
+    other thread this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    previous = signal.getsignal(signal.SIGTERM)
+
+    def handle(signum, frame):
+        server.stop()
+        if callable(previous):
+            previous(signum, frame)
+        raise SystemExit(128 + signum)
+
+    signal.signal(signal.SIGTERM, handle)
