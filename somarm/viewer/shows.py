@@ -1,0 +1,252 @@
+"""What the viewer streams per task: the arm at its greedy pose, a sweep of postures, the throws.
+
+A show turns one trial's (observation, action, reward) into meshcat commands. It never draws
+random numbers and never talks to a server, so the CLI, the training hook and the HTML export
+share it, and tests can check its poses against MuJoCo.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+from meshcat.commands import SetTransform
+
+from somarm.viewer import overlays
+from somarm.viewer.adapters import goal_adapter, throw_adapters
+from somarm.viewer.scene import MujocoScene, path_of
+
+__all__ = ["ArmShow", "SweepShow", "ThrowShow", "MODEL_OF_TASK", "load_model", "show_for_task"]
+
+#: Which MJCF model draws which task.
+MODEL_OF_TASK: dict[str, str] = {
+    "reach2": "arm2",
+    "four_goals": "arm2",
+    "reach20": "arm20",
+    "throw": "launcher",
+    "throw_distance": "launcher",
+    "throw_wind": "launcher",
+    "throw_friction": "launcher",
+    "throw_mass": "launcher",
+}
+_TIP_COLOR, _ERROR_COLOR = 0xFFD21F, 0xE0301E
+
+
+def load_model(name: str) -> mujoco.MjModel:
+    """The compiled MJCF model ``name`` (``arm2``, ``arm20``, ``launcher``) from the tasks' assets."""
+    from somarm.tasks import assets  # the tasks own where models live
+
+    return mujoco.MjModel.from_xml_path(str(assets.model_path(name)))
+
+
+def _plane_view(model: mujoco.MjModel) -> np.ndarray:
+    """A view direction for a planar mechanism: along its hinge axes, tilted a little for depth."""
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    hinges = model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
+    if hinges.any() and np.allclose(np.abs(data.xaxis[hinges][:, 2]), 1.0):
+        return np.array([0.0, -0.35, 1.0])  # arms in the x-y plane: from above
+    return np.array([0.0, -1.0, 0.25])  # flights in the x-z plane: from the side
+
+
+class ArmShow:
+    """A planar arm at the greedy pose for a goal, with fingertip, goal and the error between them.
+
+    Args:
+      model: the arm's MuJoCo model; the action is its joint angles (``nq`` values), the goal
+        a mocap body, the fingertip a site named ``fingertip``.
+      goal_of: maps an observation ``(obs_dim,)`` to the goal's (x, y); default: its first two values.
+      prefix: meshcat path of the drawing.
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        *,
+        goal_of: Callable[[np.ndarray], np.ndarray] | None = None,
+        prefix: str = "/meshcat/arm",
+    ) -> None:
+        self.model = model
+        self.scene = MujocoScene(model, prefix=prefix)
+        self.prefix = path_of(prefix)
+        self.goal_of = goal_of or (lambda observation: np.asarray(observation, dtype=np.float64)[:2])
+        self.tip_site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "fingertip")
+        if self.tip_site < 0:
+            raise ValueError("an arm model needs a site named 'fingertip'")
+        self.size = float(model.stat.extent)
+        self.last_error = float("nan")
+
+    def setup(self) -> list[dict]:
+        """Objects, the static geoms' poses, the markers and the camera."""
+        commands = self.scene.setup_commands() + self.scene.pose_commands(everything=True)
+        commands += overlays.marker_commands(
+            str(self.prefix.append("fingertip")), radius=0.02 * self.size, color=_TIP_COLOR
+        )
+        commands += overlays.segment_commands(str(self.prefix.append("error")), radius=0.005 * self.size,
+                                              color=_ERROR_COLOR)
+        center = self.model.stat.center.copy()
+        commands += overlays.camera_commands(center, _plane_view(self.model), 1.5 * self.size)
+        return commands
+
+    def qpos_of(self, action: np.ndarray) -> np.ndarray:
+        """Joint angles of an action, inside the joints' ranges."""
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != (self.model.nq,):
+            raise ValueError(f"action must have shape ({self.model.nq},) (joint angles), got {action.shape}")
+        low, high = self.model.jnt_range[:, 0], self.model.jnt_range[:, 1]
+        limited = self.model.jnt_limited.astype(bool)
+        return np.where(limited, np.clip(action, low, high), action)
+
+    def frame(self, observation: np.ndarray, action: np.ndarray, reward: float | None = None) -> list[dict]:
+        """Poses for one goal: the arm at ``action``, the goal, the fingertip and the error segment."""
+        goal = np.zeros(3)
+        goal[:2] = self.goal_of(observation)
+        mocap = np.tile(goal, (self.model.nmocap, 1)) if self.model.nmocap else None
+        commands = self.scene.pose_commands(self.qpos_of(action), mocap_pos=mocap)
+        tip = self.scene.data.site_xpos[self.tip_site].copy()  # current: pose_commands ran mj_kinematics
+        self.last_error = float(np.linalg.norm(tip[:2] - goal[:2]))
+        commands.append(SetTransform(overlays.translation(tip), self.prefix.append("fingertip")).lower())
+        commands.append(SetTransform(overlays.segment_matrix(tip, goal), self.prefix.append("error")).lower())
+        return commands
+
+
+class SweepShow:
+    """Fig. 11: the arm's greedy postures for a sweep of goals, all at once, shaded along the sweep.
+
+    Args:
+      model: the arm model (as ``ArmShow``).
+      n_postures: how many goals of the sweep are drawn together.
+      goal_of: as in ``ArmShow``.
+    """
+
+    def __init__(self, model: mujoco.MjModel, n_postures: int, *, goal_of=None,
+                 prefix: str = "/meshcat/sweep") -> None:
+        self.arms = [ArmShow(model, goal_of=goal_of, prefix=f"{prefix}/posture{k:02d}") for k in range(n_postures)]
+
+    def setup(self) -> list[dict]:
+        """Every posture's moving parts, shaded from blue (first goal) to red (last); static parts once."""
+        commands = []
+        n = len(self.arms)
+        for k, arm in enumerate(self.arms):
+            share = k / max(n - 1, 1)
+            color = (int(220 * share + 30) << 16) | (60 << 8) | int(220 * (1 - share) + 30)
+            static = {str(arm.scene.node(name)) for name, moving in zip(arm.scene.names, arm.scene.moving,
+                                                                        strict=True) if not moving}
+            for command in arm.setup():
+                node = command["path"].rsplit("/", 1)[0]
+                if k and (node in static or command["path"] in static or not command["path"].startswith("/meshcat")):
+                    continue  # the floor, the base and the camera: once is enough
+                if command["type"] == "set_object" and node not in static and "/fingertip" not in command["path"]:
+                    for material in command["object"]["materials"]:
+                        material["color"] = color
+                commands.append(command)
+        return commands
+
+    def frame(self, observations: np.ndarray, actions: np.ndarray) -> list[dict]:
+        """Posture k at ``actions[k]`` for goal ``observations[k]``; shapes ``(n_postures, dim)``."""
+        commands = []
+        for arm, observation, action in zip(self.arms, observations, actions, strict=True):
+            commands += arm.frame(observation, action)
+        return commands
+
+
+class ThrowShow:
+    """The launcher, the ground, the target and throws flying along their simulated paths.
+
+    Args:
+      model: the launcher's MuJoCo model (target as a mocap body).
+      trajectory: ``(ux, uy) -> xz`` of shape ``(n_points, 2)``: the simulated flight.
+      n_balls: how many throws are drawn at once (the action units of a fan, or 1).
+    """
+
+    def __init__(self, model: mujoco.MjModel, trajectory: Callable[[float, float], np.ndarray], *,
+                 n_balls: int = 1, prefix: str = "/meshcat/throw") -> None:
+        self.model = model
+        self.scene = MujocoScene(model, prefix=f"{prefix}/launcher")
+        self.prefix = path_of(prefix)
+        self.trajectory = trajectory
+        self.n_balls = n_balls
+        self.radius = 0.08
+
+    def _ball(self, k: int):
+        return self.prefix.append(f"ball{k:02d}")
+
+    def setup(self, *, center=(4.0, 0.0, 1.0), distance: float = 9.0) -> list[dict]:
+        """Objects, static poses, one ball per throw, and a side view of the flight."""
+        commands = self.scene.setup_commands() + self.scene.pose_commands(everything=True)
+        for k in range(self.n_balls):
+            share = k / max(self.n_balls - 1, 1)
+            color = (int(200 * share + 40) << 16) | (80 << 8) | int(200 * (1 - share) + 40)
+            commands += overlays.marker_commands(str(self._ball(k)), radius=self.radius, color=color)
+        commands += overlays.camera_commands(center, np.array([0.0, -1.0, 0.15]), distance)
+        return commands
+
+    def paths(self, actions: np.ndarray) -> list[np.ndarray]:
+        """The flights of ``actions`` ``(n_throws, 2)`` as ``(n_points, 3)`` world points."""
+        out = []
+        for ux, uy in np.asarray(actions, dtype=np.float64):
+            xz = np.asarray(self.trajectory(float(ux), float(uy)), dtype=np.float64)
+            out.append(np.column_stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]]))
+        return out
+
+    def throw_commands(self, actions: np.ndarray, target_x: float, *, fps: float = 30.0) -> list[dict]:
+        """Target placed, one trail per throw, and an animation of the balls along their paths."""
+        mocap = np.array([[target_x, 0.0, 0.0]] * self.model.nmocap)
+        commands = self.scene.pose_commands(mocap_pos=mocap)
+        paths = self.paths(actions)
+        for k, points in enumerate(paths):
+            commands.append(overlays.path_line_command(str(self.prefix.append(f"trail{k:02d}")), points,
+                                                       color=0xFFFFFF))
+        n_frames = max(len(p) for p in paths)
+        frames = [
+            [SetTransform(overlays.translation(p[min(i, len(p) - 1)]), self._ball(k)).lower()
+             for k, p in enumerate(paths)]
+            for i in range(n_frames)
+        ]
+        commands += frames[-1]  # where the balls rest if animations are off
+        commands.append(overlays.animation_command(frames, fps=fps))
+        return commands
+
+    def frame(self, observation: np.ndarray, action: np.ndarray, reward: float | None = None,
+              *, target_x: float) -> list[dict]:
+        """One throw during training: its trail and the ball at its landing point (no animation)."""
+        mocap = np.array([[target_x, 0.0, 0.0]] * self.model.nmocap)
+        commands = self.scene.pose_commands(mocap_pos=mocap)
+        points = self.paths(np.asarray(action)[None, :2])[0]
+        commands.append(overlays.path_line_command(str(self.prefix.append("trail00")), points, color=0xFFFFFF))
+        commands.append(SetTransform(overlays.translation(points[-1]), self._ball(0)).lower())
+        return commands
+
+
+class _ThrowStream:
+    """A ``ThrowShow`` fed one throw at a time, with the target where the task puts it."""
+
+    def __init__(self, show: ThrowShow, target_of: Callable[[np.ndarray], float]) -> None:
+        self.show = show
+        self.target_of = target_of
+
+    def setup(self) -> list[dict]:
+        return self.show.setup()
+
+    def frame(self, observation: np.ndarray, action: np.ndarray, reward: float | None = None) -> list[dict]:
+        return self.show.frame(observation, action, reward, target_x=self.target_of(observation))
+
+
+def show_for_task(task_name: str, task=None):
+    """What ``somarm view`` and ``LiveView`` stream for a task: ``setup()`` then ``frame(obs, action, reward)``.
+
+    Args:
+      task_name: registered task name.
+      task: the task object, when there is one; it tells where goals and targets are.
+
+    Raises:
+      ValueError: unknown task name.
+    """
+    if task_name not in MODEL_OF_TASK:
+        raise ValueError(f"unknown task {task_name!r}; allowed: {', '.join(MODEL_OF_TASK)}")
+    model = load_model(MODEL_OF_TASK[task_name])
+    if MODEL_OF_TASK[task_name] != "launcher":
+        return ArmShow(model, goal_of=goal_adapter(task_name, task), prefix=f"/meshcat/{task_name}")
+    trajectory, target_of = throw_adapters(task_name, task)
+    return _ThrowStream(ThrowShow(model, trajectory, prefix=f"/meshcat/{task_name}"), target_of)

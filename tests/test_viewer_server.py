@@ -1,0 +1,224 @@
+"""The meshcat server we start: loopback only, timeouts, no orphans, no frozen pipe, live hook."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import warnings
+
+import meshcat.geometry as mg
+import numpy as np
+import pytest
+from meshcat.commands import SetObject
+
+from somarm.viewer.client import MeshcatClient, ViewerUnavailableWarning
+from somarm.viewer.scene import path_of
+from somarm.viewer.server import MeshcatServer
+
+
+@pytest.fixture
+def server():
+    running = MeshcatServer().start()
+    yield running
+    running.stop()
+
+
+def box_command(name="box"):
+    return SetObject(mg.Box([0.1, 0.2, 0.3]), path=path_of(f"/meshcat/{name}")).lower()
+
+
+def listening_addresses(port: int) -> set[str]:
+    """Local addresses with a socket LISTENing on ``port``, read from /proc (no traffic)."""
+    found = set()
+    for table, width in (("/proc/net/tcp", 8), ("/proc/net/tcp6", 32)):
+        if not os.path.exists(table):
+            continue
+        with open(table) as handle:
+            next(handle)
+            for line in handle:
+                fields = line.split()
+                address, port_hex = fields[1].split(":")
+                if fields[3] == "0A" and int(port_hex, 16) == port:  # 0A = LISTEN
+                    if width == 8:
+                        found.add(".".join(str(b) for b in reversed(bytes.fromhex(address))))
+                    else:
+                        found.add(address)
+    return found
+
+
+def pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    # A zombie (exited, not yet reaped by its parent) counts as gone.
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def wait_until(condition, timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.05)
+    return condition()
+
+
+def test_listens_on_loopback_only_by_default(server):
+    assert server.web_url.startswith("http://127.0.0.1:")
+    assert listening_addresses(server.port) == {"127.0.0.1"}
+    zmq_port = int(server.zmq_url.rsplit(":", 1)[1])
+    assert listening_addresses(zmq_port) == {"127.0.0.1"}
+
+
+def test_commands_round_trip_and_the_url_is_reported(server):
+    client = MeshcatClient(server.zmq_url, timeout_s=5.0)
+    assert client.web_url() == server.web_url
+    assert client.send(box_command())
+    assert client.send_batch([box_command("a"), box_command("b")])
+    assert client.request([b"n_clients"]) == b"0"
+    client.close()
+
+
+def test_a_killed_server_times_out_warns_once_and_never_hangs(server):
+    client = MeshcatClient(server.zmq_url, timeout_s=0.3)
+    assert client.send(box_command())
+    server.process.kill()
+    server.process.wait(timeout=5)
+    start = time.monotonic()
+    with pytest.warns(ViewerUnavailableWarning, match="did not answer"):
+        assert client.send(box_command()) is False
+    assert time.monotonic() - start < 3.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a second warning would fail here
+        assert client.send(box_command()) is False
+        assert client.send_batch([box_command()]) is False
+    assert client.dead
+
+
+def test_port_in_use_fails_with_the_servers_reason(server):
+    with pytest.raises(RuntimeError, match="did not start"):
+        MeshcatServer(port=server.port, start_timeout_s=20).start()
+    with pytest.raises(ValueError, match="port must be"):
+        MeshcatServer(port=70000)
+
+
+async def _connect_many(url: str, n: int) -> int:
+    import tornado.websocket
+
+    opened = 0
+    for _ in range(n):
+        connection = await asyncio.wait_for(tornado.websocket.websocket_connect(url), timeout=5)
+        opened += 1
+        connection.close()
+    return opened
+
+
+def test_hundreds_of_browser_connections_do_not_freeze_the_server(server):
+    client = MeshcatClient(server.zmq_url, timeout_s=5.0)
+    client.send(box_command())  # each connection is sent the scene, as a browser would be
+    ws_url = f"ws://127.0.0.1:{server.port}/"
+    assert asyncio.run(_connect_many(ws_url, 400)) == 400
+    assert client.send(box_command("after"))
+    assert server.log_path.stat().st_size < 4096  # nothing printed per connection
+    client.close()
+
+
+async def _wait_then_send(server: MeshcatServer) -> tuple[bytes | None, bool]:
+    import tornado.websocket
+
+    connection = await asyncio.wait_for(
+        tornado.websocket.websocket_connect(f"ws://127.0.0.1:{server.port}/"), timeout=5
+    )
+    client = MeshcatClient(server.zmq_url, timeout_s=5.0)
+    loop = asyncio.get_running_loop()
+    reply = await loop.run_in_executor(None, client.request, [b"wait"])
+    sent = await loop.run_in_executor(None, client.send, box_command())
+    connection.close()
+    client.close()
+    return reply, sent
+
+
+def test_wait_then_send_does_not_hang(server):
+    reply, sent = asyncio.run(_wait_then_send(server))
+    assert reply == b"ok" and sent
+
+
+_PARENT = textwrap.dedent(
+    """
+    import sys, time
+    from somarm.viewer.server import MeshcatServer, stop_on_signals
+    server = MeshcatServer().start()
+    stop_on_signals(server)
+    print(server.process.pid, flush=True)
+    try:
+        time.sleep(60)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+    """
+)
+
+
+@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGINT, signal.SIGKILL])
+def test_the_server_is_not_orphaned(how):
+    parent = subprocess.Popen([sys.executable, "-c", _PARENT], stdout=subprocess.PIPE, text=True)
+    try:
+        server_pid = int(parent.stdout.readline())
+        assert pid_alive(server_pid)
+        parent.send_signal(how)
+        parent.wait(timeout=10)
+        assert wait_until(lambda: not pid_alive(server_pid), timeout_s=10), f"server {server_pid} orphaned"
+        if how == signal.SIGTERM:
+            assert parent.returncode == 128 + signal.SIGTERM
+    finally:
+        if parent.poll() is None:
+            parent.kill()
+            parent.wait()
+
+
+def test_live_view_is_throttled_and_survives_a_killed_server():
+    from somarm.viewer.live import LiveView
+
+    observations, actions, rewards = np.full((3, 2), 0.5), np.full((3, 2), 0.3), np.zeros(3)
+    with LiveView("reach2", max_rate_hz=20.0, timeout_s=0.3) as view:
+        assert view.url.startswith("http://127.0.0.1:")
+        start = time.monotonic()
+        n_calls = 0
+        while time.monotonic() - start < 0.5:
+            view.update(n_calls, observations, actions, rewards)
+            n_calls += 1
+        assert wait_until(lambda: view.frames_sent >= 2, timeout_s=5)
+        elapsed = time.monotonic() - start
+        assert view.frames_sent <= 20.0 * elapsed + 2  # throttled: not one frame per call
+        assert n_calls > 100 * view.frames_sent
+        view._server.process.kill()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            start = time.monotonic()
+            steps = 0
+            while time.monotonic() - start < 1.5:  # "training" keeps going through the timeout
+                view.update(steps, observations, actions, rewards)
+                steps += 1
+            assert wait_until(lambda: not view.alive, timeout_s=5)
+        assert steps > 1000
+        assert sum(issubclass(w.category, ViewerUnavailableWarning) for w in caught) == 1
+
+
+def test_live_view_rejects_bad_arguments():
+    from somarm.viewer.live import LiveView
+
+    with pytest.raises(ValueError, match="max_rate_hz"):
+        LiveView("reach2", max_rate_hz=0)
+    with pytest.raises(ValueError, match="unknown task"):
+        LiveView("juggle")
