@@ -90,7 +90,7 @@ def squared_distances(weights: np.ndarray, x: np.ndarray) -> np.ndarray:
     Returns:
       ``(..., n_units)``.
     """
-    total = np.zeros(weights.shape[:-1])
+    total = np.zeros(np.broadcast_shapes(weights.shape[:-1], x.shape[:-1] + (1,)))
     for i in range(weights.shape[-1]):
         diff = x[..., None, i] - weights[..., i]
         total += diff * diff
