@@ -38,7 +38,11 @@ _F = InverseDecay(500.0)
 
 @dataclass(frozen=True)
 class MotoricConfig:
-    """Everything that defines a Motoric Map; the defaults are this project's Table 2 counterpart."""
+    """Everything that defines a Motoric Map; the defaults are Table 2's numbers.
+
+    ``somarm.presets.get_motoric("table2")`` is Fig. 13 B's config: these defaults with the input
+    weights starting in [0, 1] as Table 1 says.
+    """
 
     input_shape: tuple[int, ...] = (10, 10)
     """Input map grid: ``(n,)`` or ``(rows, cols)``; one private action per unit."""

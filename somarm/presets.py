@@ -1,0 +1,174 @@
+"""The paper's parameter tables by name, so an experiment can say which table it uses.
+
+``get("table1")`` is the ``SOMQConfig`` of Table 1; ``PRESETS["table1"]`` also holds the run
+facts the paper states (task, figure, trials, averaging window). Where a table is silent the
+value used is this project's choice and the preset's ``choices`` say so:
+
+- t starts at 0 (f(0) = 1); Table 4's "throw" count is the same step counter.
+- Tables 4, 5 and 7 give no initial input-weight range: the observation bounds are used.
+- Table 2 does not restate Table 1's [0, 1] input-weight range; it is kept.
+- Table 4 has a single input unit, so lambda_S and N_S never matter; f(throw) and 0 are used.
+- Table 5 lists only what changes from Table 4, and "minimum values are no longer used": the
+  other Table 4 values are kept without their floors.
+- Table 7 A ("table7a") changes only the input map (30 x 1, N_S = 7 f) and f (0.9985^throw).
+- Run lengths other than Fig. 17's 4000 throws are not given; ``n_steps`` is None there.
+
+The Motoric Map of Fig. 13 B (``get_motoric("table2")``) takes every number it shares with
+SOM-Q from Table 2 (input map, alpha, lambda_A, epsilon and their floors, f); its action
+neighbourhood, on the input grid, uses Table 2's N_A = 3 f(t). That mapping is this project's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .motoric import MotoricConfig
+from .schedules import ExponentialDecay, InverseDecay, Schedule
+from .somq import SOMQConfig
+
+__all__ = ["Preset", "PRESETS", "get", "get_motoric", "config_for", "describe", "motoric_from_somq"]
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A parameter table and the run facts the paper gives with it."""
+
+    name: str
+    description: str
+    """One line: which table, figure and task."""
+    config: SOMQConfig
+    task: str
+    """The somarm task the table was used on."""
+    figures: str
+    n_trials: int
+    """Independent trials averaged in the figure."""
+    window: int | None
+    """Steps each plotted point averages over (None: the figure is a map, not a curve)."""
+    n_steps: int | None = None
+    """Steps per trial, where the paper states it."""
+    choices: tuple[str, ...] = ()
+    """Values this project chose where the table is silent."""
+
+
+def _table1() -> Preset:
+    f = InverseDecay(1000.0)
+    config = SOMQConfig(
+        input_shape=(50,), action_shape=(50,), alpha=Schedule(1.0, f), lambda_s=Schedule(1.0, f),
+        lambda_a=Schedule(1.0, f), n_s=Schedule(20.0, f), n_a=Schedule(20.0, f), p=Schedule(1.0, f),
+        epsilon=Schedule(0.1, f), input_init=(0.0, 1.0),
+    )
+    return Preset("table1", "Table 1: reach2 (Figs. 7-10), 50x1 input and action maps, f = 1/(t/1000+1)",
+                  config, "reach2", "7, 8, 9, 10 (and 11 with reach20)", 20, 1000)
+
+
+def _table2() -> Preset:
+    f = InverseDecay(500.0)
+    config = SOMQConfig(
+        input_shape=(10, 10), action_shape=(8,), alpha=Schedule(1.0, f, 0.1), lambda_s=Schedule(1.0, f),
+        lambda_a=Schedule(1.0, f, 0.1), n_s=Schedule(10.0, f), n_a=Schedule(3.0, f), p=Schedule(0.25, f),
+        epsilon=Schedule(0.1, f, 0.01), input_init=(0.0, 1.0),
+    )
+    text = "Table 2: four_goals (Figs. 13-15), 10x10 input, 8x1 actions, f = 1/(t/500+1), floors"
+    return Preset("table2", text, config, "four_goals", "13 A, 14, 15", 20, 100,
+                  choices=("input weights start in [0, 1] as Table 1",))
+
+
+def _table4() -> Preset:
+    f = ExponentialDecay(0.999)
+    config = SOMQConfig(
+        input_shape=(1,), action_shape=(30,), alpha=Schedule(1.0, f, 0.05), lambda_s=Schedule(1.0, f),
+        lambda_a=Schedule(1.0, f, 0.1), n_s=Schedule(0.0), n_a=Schedule(15.0, f, 2.0),
+        p=Schedule(1.0, f, 0.5), epsilon=Schedule(1.0, f, 0.1),
+    )
+    text = "Table 4: throw (Fig. 17), one input unit, 30x1 actions, f = 0.999^throw, floors"
+    return Preset("table4", text, config, "throw", "17", 1, None, n_steps=4000,
+                  choices=("single input unit: lambda_S = f and N_S = 0 (never used)",
+                           "input weights start in the observation bounds"))
+
+
+def _table5() -> Preset:
+    f = ExponentialDecay(0.9985)
+    config = SOMQConfig(
+        input_shape=(30,), action_shape=(30,), alpha=Schedule(1.0, f), lambda_s=Schedule(0.3, f),
+        lambda_a=Schedule(1.0, f), n_s=Schedule(15.0, f), n_a=Schedule(25.0, f), p=Schedule(1.0, f),
+        epsilon=Schedule(1.0, f),
+    )
+    text = "Table 5: throw_distance (Figs. 21, 24 +NL/0.9985), 30x1 maps, f = 0.9985^throw"
+    figures = "21, 24 (-NL: neighbourhood_q=false; -NL/0.9997: also decay=exp:0.9997)"
+    return Preset("table5", text, config, "throw_distance", figures, 20, 100,
+                  choices=("alpha, lambda_A, p, epsilon from Table 4 without floors",
+                           "input weights start in the observation bounds"))
+
+
+def _table7(name: str) -> Preset:
+    single = name == "table7a"
+    f = ExponentialDecay(0.9985 if single else 0.9997)
+    config = SOMQConfig(
+        input_shape=(30,) if single else (10, 10), action_shape=(30,), alpha=Schedule(1.0, f),
+        lambda_s=Schedule(0.3, f), lambda_a=Schedule(1.0, f), n_s=Schedule(7.0, f), n_a=Schedule(7.0, f),
+        p=Schedule(1.0, f), epsilon=Schedule(1.0, f),
+    )
+    if single:
+        text = "Table 7, experiment A: throw_distance (Fig. 25 A), 30x1 input, N_S = 7 f, f = 0.9985^throw"
+        task = "throw_distance"
+    else:
+        text = "Table 7: throw_wind/friction/mass (Fig. 25 B-D), 10x10 input, 30x1 actions, f = 0.9997^throw"
+        task = "throw_wind"
+    return Preset(name, text, config, task, "25", 100, 100,
+                  choices=("input weights start in the observation bounds",))
+
+
+PRESETS: dict[str, Preset] = {
+    p.name: p for p in (_table1(), _table2(), _table4(), _table5(), _table7("table7"), _table7("table7a"))
+}
+
+
+def _preset(name: str) -> Preset:
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; allowed: {', '.join(PRESETS)}")
+    return PRESETS[name]
+
+
+def get(name: str) -> SOMQConfig:
+    """The ``SOMQConfig`` of a paper table (``table1``, ``table2``, ``table4``, ``table5``, ``table7``,
+    ``table7a``).
+
+    Raises:
+      ValueError: an unknown name (the message lists the names).
+    """
+    return _preset(name).config
+
+
+def describe(name: str) -> str:
+    """One line saying which table, figure and task a preset is."""
+    return _preset(name).description
+
+
+def motoric_from_somq(config: SOMQConfig) -> MotoricConfig:
+    """The Motoric Map counterpart of a SOM-Q config: every shared number kept, N_A on the input grid."""
+    shared = {field.name for field in dataclasses.fields(MotoricConfig)} & set(config.to_dict())
+    values = {name: getattr(config, name) for name in shared}
+    return MotoricConfig(**values, neighbourhood_values=config.neighbourhood_q)
+
+
+def get_motoric(name: str) -> MotoricConfig:
+    """The Motoric Map config matching a table (``get_motoric("table2")`` is Fig. 13 B's).
+
+    Raises:
+      ValueError: an unknown name (the message lists the names).
+    """
+    return motoric_from_somq(get(name))
+
+
+def config_for(kind: str, name: str) -> SOMQConfig | MotoricConfig:
+    """The config of learner ``kind`` (``somq`` or ``motoric``) for preset ``name``.
+
+    Raises:
+      ValueError: an unknown kind or name (the message lists what is allowed).
+    """
+    if kind == "somq":
+        return get(name)
+    if kind == "motoric":
+        return get_motoric(name)
+    raise ValueError(f"unknown learner kind {kind!r}; allowed: somq, motoric")
