@@ -17,6 +17,7 @@ __all__ = [
     "camera_commands",
     "marker_commands",
     "path_line_command",
+    "segment_commands",
     "segment_matrix",
     "translation",
 ]
@@ -29,7 +30,7 @@ def translation(xyz) -> np.ndarray:
     return matrix
 
 
-def marker_commands(path: str, *, radius: float, color: int, opacity: float = 1.0) -> list[dict]:
+def marker_commands(path, *, radius: float, color: int, opacity: float = 1.0) -> list[dict]:
     """A sphere at ``path`` (move it with ``set_transform``)."""
     material = mg.MeshPhongMaterial(color=color, opacity=opacity, transparent=opacity < 1.0)
     return [SetObject(mg.Sphere(radius), material, path_of(path)).lower()]
@@ -53,29 +54,30 @@ def segment_matrix(start, end) -> np.ndarray:
     return matrix
 
 
-def segment_commands(path: str, *, radius: float, color: int) -> list[dict]:
+def segment_commands(path, *, radius: float, color: int) -> list[dict]:
     """A unit cylinder at ``path``; place it with ``SetTransform(segment_matrix(a, b), path)``."""
     return [SetObject(mg.Cylinder(1.0, radius), mg.MeshPhongMaterial(color=color), path_of(path)).lower()]
 
 
-def path_line_command(path: str, points: np.ndarray, *, color: int) -> dict:
+def path_line_command(path, points: np.ndarray, *, color: int) -> dict:
     """A polyline through ``points`` ``(n_points, 3)``."""
     points = np.asarray(points, dtype=np.float32)
     geometry = mg.PointsGeometry(points.T)
-    return SetObject(mg.Line(geometry, mg.LineBasicMaterial(color=color, linewidth=2)), path_of(path)).lower()
+    return SetObject(mg.Line(geometry, mg.LineBasicMaterial(color=color, linewidth=2)), path=path_of(path)).lower()
 
 
 def camera_commands(center, view_direction, distance: float, *, hide_grid: bool = True) -> list[dict]:
-    """Point meshcat's orbiting camera at ``center`` from ``distance`` along ``view_direction``.
+    """Look at ``center`` from ``distance`` along ``view_direction`` (world vectors).
 
-    meshcat's camera orbits the origin of ``/Cameras/default``, and its position is written
-    in three.js's y-up frame, so a world offset (x, y, z) is given as (x, z, -y).
+    meshcat 0.3.2's orbiting camera always looks at the world origin, so the drawing under
+    ``/meshcat`` is shifted by ``-center`` instead; and the camera's position is written in
+    three.js's y-up frame, so a world offset (x, y, z) is given as (x, z, -y).
     """
     direction = np.asarray(view_direction, dtype=np.float64)
     direction = direction / np.linalg.norm(direction)
     offset = distance * direction
     commands = [
-        SetTransform(translation(center), path_of("/Cameras/default")).lower(),
+        SetTransform(translation(-np.asarray(center, dtype=np.float64)), path_of("/meshcat")).lower(),
         SetProperty("position", [float(offset[0]), float(offset[2]), float(-offset[1])],
                     path_of("/Cameras/default/rotated/<object>")).lower(),
     ]

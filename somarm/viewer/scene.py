@@ -44,8 +44,10 @@ class GeomPart:
     local: np.ndarray
 
 
-def path_of(parts: str | tuple[str, ...]) -> Path:
-    """A meshcat ``Path`` from ``"/a/b"`` or ``("a", "b")``."""
+def path_of(parts: str | tuple[str, ...] | Path) -> Path:
+    """A meshcat ``Path`` from ``"/a/b"``, ``("a", "b")`` or a ``Path``."""
+    if isinstance(parts, Path):
+        return parts
     if isinstance(parts, str):
         parts = tuple(p for p in parts.split("/") if p)
     return Path(tuple(parts))

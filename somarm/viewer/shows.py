@@ -81,12 +81,12 @@ class ArmShow:
         """Objects, the static geoms' poses, the markers and the camera."""
         commands = self.scene.setup_commands() + self.scene.pose_commands(everything=True)
         commands += overlays.marker_commands(
-            str(self.prefix.append("fingertip")), radius=0.02 * self.size, color=_TIP_COLOR
+            (self.prefix.append("fingertip")), radius=0.02 * self.size, color=_TIP_COLOR
         )
-        commands += overlays.segment_commands(str(self.prefix.append("error")), radius=0.005 * self.size,
+        commands += overlays.segment_commands((self.prefix.append("error")), radius=0.005 * self.size,
                                               color=_ERROR_COLOR)
         center = self.model.stat.center.copy()
-        commands += overlays.camera_commands(center, _plane_view(self.model), 1.5 * self.size)
+        commands += overlays.camera_commands(center, _plane_view(self.model), 0.95 * self.size)
         return commands
 
     def qpos_of(self, action: np.ndarray) -> np.ndarray:
@@ -131,7 +131,7 @@ class SweepShow:
         for k, arm in enumerate(self.arms):
             share = k / max(n - 1, 1)
             color = (int(220 * share + 30) << 16) | (60 << 8) | int(220 * (1 - share) + 30)
-            static = {str(arm.scene.node(name)) for name, moving in zip(arm.scene.names, arm.scene.moving,
+            static = {arm.scene.node(name).lower() for name, moving in zip(arm.scene.names, arm.scene.moving,
                                                                         strict=True) if not moving}
             for command in arm.setup():
                 node = command["path"].rsplit("/", 1)[0]
@@ -178,9 +178,17 @@ class ThrowShow:
         for k in range(self.n_balls):
             share = k / max(self.n_balls - 1, 1)
             color = (int(200 * share + 40) << 16) | (80 << 8) | int(200 * (1 - share) + 40)
-            commands += overlays.marker_commands(str(self._ball(k)), radius=self.radius, color=color)
+            commands += overlays.marker_commands(self._ball(k), radius=self.radius, color=color)
         commands += overlays.camera_commands(center, np.array([0.0, -1.0, 0.15]), distance)
         return commands
+
+    def camera_fitting(self, points: np.ndarray, target_x: float) -> list[dict]:
+        """A side view that holds the launcher, the target and every point of ``points`` ``(n, 3)``."""
+        low = np.minimum(points.min(axis=0), [0.0, 0.0, 0.0])
+        high = np.maximum(points.max(axis=0), [target_x, 0.0, 0.5])
+        center = (low + high) / 2
+        span = max(high[0] - low[0], 1.4 * (high[2] - low[2]))
+        return overlays.camera_commands(center, np.array([0.0, -1.0, 0.12]), 0.85 * span + 1.0)
 
     def paths(self, actions: np.ndarray) -> list[np.ndarray]:
         """The flights of ``actions`` ``(n_throws, 2)`` as ``(n_points, 3)`` world points."""
@@ -196,7 +204,7 @@ class ThrowShow:
         commands = self.scene.pose_commands(mocap_pos=mocap)
         paths = self.paths(actions)
         for k, points in enumerate(paths):
-            commands.append(overlays.path_line_command(str(self.prefix.append(f"trail{k:02d}")), points,
+            commands.append(overlays.path_line_command((self.prefix.append(f"trail{k:02d}")), points,
                                                        color=0xFFFFFF))
         n_frames = max(len(p) for p in paths)
         frames = [
@@ -205,6 +213,7 @@ class ThrowShow:
             for i in range(n_frames)
         ]
         commands += frames[-1]  # where the balls rest if animations are off
+        commands += self.camera_fitting(np.concatenate(paths), target_x)
         commands.append(overlays.animation_command(frames, fps=fps))
         return commands
 
@@ -214,7 +223,7 @@ class ThrowShow:
         mocap = np.array([[target_x, 0.0, 0.0]] * self.model.nmocap)
         commands = self.scene.pose_commands(mocap_pos=mocap)
         points = self.paths(np.asarray(action)[None, :2])[0]
-        commands.append(overlays.path_line_command(str(self.prefix.append("trail00")), points, color=0xFFFFFF))
+        commands.append(overlays.path_line_command((self.prefix.append("trail00")), points, color=0xFFFFFF))
         commands.append(SetTransform(overlays.translation(points[-1]), self._ball(0)).lower())
         return commands
 

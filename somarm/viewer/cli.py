@@ -1,0 +1,97 @@
+"""``somarm view TASK``: watch a learner (trained or not) act on a task in the browser, or export it.
+
+Examples::
+
+    somarm view reach2 --run runs/reach2__somq__seed0     # live, until Ctrl-C
+    somarm view throw --run runs/throw__somq__seed0        # the fan of Fig. 17, animated
+    somarm view reach20 --run DIR --goals 9                # Fig. 11: nine postures at once
+    somarm view reach2 --html reach2.html                  # offline page, no server
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["main", "build_parser"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``somarm view`` argument parser."""
+    parser = argparse.ArgumentParser(prog="somarm view", description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog="\n".join(__doc__.split("\n")[2:]))
+    parser.add_argument("task", help="task name (reach2, four_goals, reach20, throw, throw_distance, ...)")
+    parser.add_argument("--run", default=None, help="run folder (config.json + learner.npz); default: untrained")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address the page listens on (default 127.0.0.1: this machine only)")
+    parser.add_argument("--port", type=int, default=None, help="web port (default: a free one)")
+    parser.add_argument("--html", default=None, metavar="FILE",
+                        help="write a self-contained HTML animation to FILE instead of serving")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the goals shown (default 0)")
+    parser.add_argument("--goals", type=int, default=12, help="how many goals to cycle through (default 12)")
+    parser.add_argument("--trial", type=int, default=0, help="which trial of the run to show (default 0)")
+    parser.add_argument("--interval", type=float, default=1.5, help="seconds per goal when live (default 1.5)")
+    parser.add_argument("--once", action="store_true", help="go through the goals once, then stop")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``somarm view``; returns the exit status (0 ok, 2 bad input, 130 Ctrl-C)."""
+    args = build_parser().parse_args(argv)
+    try:
+        from somarm.validation import check_int, check_number
+        from somarm.viewer import sessions, shows
+
+        if args.task not in shows.MODEL_OF_TASK:
+            raise ValueError(f"unknown task {args.task!r}; allowed: {', '.join(shows.MODEL_OF_TASK)}")
+        check_int("--goals", args.goals)
+        check_int("--seed", args.seed, minimum=0)
+        check_int("--trial", args.trial, minimum=0)
+        check_number("--interval", args.interval, minimum=0.0)
+        if args.port is not None and not 0 <= args.port <= 65535:
+            raise ValueError(f"--port must be in 0..65535, got {args.port}")
+        session = sessions.load_session(args.task, run=args.run, n_goals=args.goals, seed=args.seed,
+                                        trial=args.trial)
+        if args.html is not None:
+            from somarm.viewer.client import Recorder
+            from somarm.viewer.html import write_html
+
+            recorder = Recorder()
+            sessions.record(session, recorder)
+            path = write_html(args.html, recorder.commands(), title=f"somarm {args.task}")
+            print(f"wrote {path} (mean error {session.errors.mean():.4f} over {len(session.errors)} goals)")
+            return 0
+    except ValueError as exc:
+        print(f"somarm view: {exc}", file=sys.stderr)
+        return 2
+    return _serve(session, args)
+
+
+def _serve(session, args) -> int:
+    from somarm.viewer import sessions
+    from somarm.viewer.client import MeshcatClient
+    from somarm.viewer.server import MeshcatServer, stop_on_signals
+
+    server = MeshcatServer(host=args.host, port=args.port)
+    try:
+        server.start()
+    except (RuntimeError, OSError) as exc:
+        print(f"somarm view: {exc}", file=sys.stderr)
+        return 2
+    stop_on_signals(server)
+    client = MeshcatClient(server.zmq_url)
+    try:
+        print(f"meshcat viewer for {args.task}: open {server.web_url}  (Ctrl-C to stop)", flush=True)
+        sessions.play(session, client, interval_s=args.interval, once=args.once,
+                      log=lambda line: print(line, flush=True))
+        return 0
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        client.close()
+        server.stop()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

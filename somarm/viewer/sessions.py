@@ -1,0 +1,162 @@
+"""A viewing session: goals, the learner's greedy answers, and how they are played or exported.
+
+``somarm view`` builds a ``Session`` (from a run folder or an untrained learner), then either
+plays it on a live meshcat server until Ctrl-C or records it into a static HTML animation.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from somarm.streams import trial_generators
+from somarm.viewer import shows
+from somarm.viewer.adapters import goal_adapter
+from somarm.viewer.client import CommandSink
+from somarm.viewer.overlays import animation_command
+
+__all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play"]
+
+#: Frames of joint-space interpolation between two goals in the HTML animation.
+_FRAMES_BETWEEN_GOALS = 12
+_FRAMES_HOLDING_GOAL = 18
+
+
+@dataclass
+class Session:
+    """What one ``somarm view`` shows.
+
+    Attributes:
+      task_name: the task.
+      observations: ``(n_goals, obs_dim)`` the goals shown, in sweep order.
+      actions: ``(n_goals, action_dim)`` the learner's greedy actions for them.
+      errors: ``(n_goals,)`` minus the task's reward for each (the distance missed).
+      fan: ``(n_units, action_dim)`` every action unit of the shown trial (the throw fan), or None.
+      show: the task's show (``shows.show_for_task``).
+    """
+
+    task_name: str
+    observations: np.ndarray
+    actions: np.ndarray
+    errors: np.ndarray
+    fan: np.ndarray | None
+    show: object
+
+
+def greedy_answers(task, learner, observations: np.ndarray, *, trial: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The learner's greedy actions ``(n, action_dim)`` for ``observations`` ``(n, obs_dim)`` and their errors."""
+    batch = np.broadcast_to(observations, (learner.n_trials, *observations.shape)).copy()
+    actions = np.asarray(learner.predict(batch))[trial]
+    errors = -np.asarray(task.evaluate(observations, actions), dtype=np.float64)
+    return actions, errors
+
+
+def _sweep_order(observations: np.ndarray) -> np.ndarray:
+    """Goals sorted by angle about their mean, so a cycle (or Fig. 11's sweep) moves smoothly."""
+    if observations.shape[1] < 2:
+        return np.argsort(observations[:, 0])
+    centred = observations[:, :2] - observations[:, :2].mean(axis=0)
+    return np.argsort(np.arctan2(centred[:, 1], centred[:, 0]))
+
+
+def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int = 12, seed: int = 0,
+                 trial: int = 0) -> Session:
+    """Goals drawn from the task (the ``viewer`` random stream of ``seed``) and the learner's answers.
+
+    Args:
+      task_name: registered task.
+      run: a run folder (config.json + learner.npz); None shows an untrained learner.
+      n_goals: how many goals are cycled through (or swept, for reach20).
+      seed: seed of the goals (and of the untrained learner).
+      trial: which trial of the run's learner is shown.
+
+    Raises:
+      ValueError: the run is for another task, or ``trial`` is not one of its trials.
+    """
+    from somarm import tasks, training
+
+    if run is not None:
+        config, learner = training.load_run(run)
+        if config.task != task_name:
+            raise ValueError(f"--run {run} trained task {config.task!r}, not {task_name!r}")
+        task_params = {k: training._task_value(v) for k, v in config.task_params.items()}
+    else:
+        config = training.RunConfig(task=task_name, seed=seed).resolved()
+        _, learner = training.build(config)
+        task_params = {}
+    if not 0 <= trial < learner.n_trials:
+        raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
+    task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
+    rng = trial_generators(seed, np.array([0]), "viewer")[0]
+    observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
+    observations = observations[_sweep_order(observations)]
+    actions, errors = greedy_answers(task, learner, observations, trial=trial)
+    fan = None
+    if task_name == "throw" and hasattr(learner, "action_weights"):
+        fan = np.asarray(learner.action_weights)[trial]
+    if task_name == "reach20":
+        show = shows.SweepShow(shows.load_model("arm20"), len(observations),
+                               goal_of=goal_adapter(task_name, task))
+    else:
+        show = shows.show_for_task(task_name, task)
+    return Session(task_name, observations, actions, errors, fan, show)
+
+
+def arm_animation(show: shows.ArmShow, observations: np.ndarray, actions: np.ndarray) -> dict:
+    """A looping animation through the goals: hold each pose, then move in joint space to the next."""
+    frames = []
+    n = len(observations)
+    for k in range(n):
+        frames += [show.frame(observations[k], actions[k])] * _FRAMES_HOLDING_GOAL
+        following = (k + 1) % n
+        for share in np.linspace(0.0, 1.0, _FRAMES_BETWEEN_GOALS + 2)[1:-1]:
+            action = (1 - share) * actions[k] + share * actions[following]
+            frames.append(show.frame(observations[following], action))
+    return animation_command(frames)
+
+
+def record(session: Session, sink: CommandSink) -> None:
+    """Everything of a session a static page needs: the scene and one looping animation (or the sweep)."""
+    show = session.show
+    if isinstance(show, shows.SweepShow):
+        sink.send_batch(show.setup())
+        sink.send_batch(show.frame(session.observations, session.actions))
+    elif isinstance(show, shows.ArmShow):
+        sink.send_batch(show.setup())
+        sink.send_batch(show.frame(session.observations[0], session.actions[0]))
+        sink.send(arm_animation(show, session.observations, session.actions))
+    else:
+        throws = session.fan if session.fan is not None else session.actions[:1]
+        show.show.n_balls = len(throws)
+        sink.send_batch(show.setup())
+        sink.send_batch(show.show.throw_commands(throws, show.target_of(session.observations[0])))
+
+
+def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: bool = False,
+         log=print) -> None:
+    """Stream a session to a live server, goal after goal, until Ctrl-C (or one pass if ``once``)."""
+    show = session.show
+    if isinstance(show, shows.SweepShow) or (session.fan is not None):
+        record(session, sink)
+        log(f"{session.task_name}: {len(session.observations)} goals, mean error {session.errors.mean():.4f}")
+        while not once:
+            time.sleep(interval_s)
+        return
+    if isinstance(show, shows.ArmShow):
+        sink.send_batch(show.setup())
+    else:
+        show.show.n_balls = 1
+        sink.send_batch(show.setup())
+    while True:
+        for observation, action, error in zip(session.observations, session.actions, session.errors, strict=True):
+            if isinstance(show, shows.ArmShow):
+                sink.send_batch(show.frame(observation, action))
+            else:
+                sink.send_batch(show.show.throw_commands(action[None], show.target_of(observation)))
+            log(f"goal {np.array2string(observation, precision=3)}  error {error:.4f}")
+            time.sleep(interval_s)
+        if once:
+            return
