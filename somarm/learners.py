@@ -22,7 +22,7 @@ from .io import atomic_save_npz
 from .schedules import Schedule, parse_bool, parse_decay, parse_shape
 from .som import grid_coordinates, grid_distances, map_shape
 from .streams import PURPOSES, UniformStreams, trial_ids_for
-from .validation import check_array, check_bounds, check_int, check_number
+from .validation import check_bounds, check_int, check_number
 
 __all__ = [
     "LEARNERS",  # noqa: F822 (filled on first use by __getattr__)
@@ -233,6 +233,8 @@ class LearnerBase:
         self._units = np.zeros(self.n_trials, dtype=np.int64)
         self._actions = np.zeros((self.n_trials, self.action_dim))
         self._pending = False
+        self._no_bootstrap = np.zeros(self.n_trials, dtype=np.bool_)
+        self._current_t = -1
         self._build()
 
     def _build(self) -> None:
@@ -257,36 +259,66 @@ class LearnerBase:
         self._streams = UniformStreams(self.seed, self.trial_ids, "learner", width)
 
     # -- checks ---------------------------------------------------------------------------------
-    def _check_observations(self, observations, *, allow_many=False, name="observations") -> np.ndarray:
-        x = observations if isinstance(observations, np.ndarray) else np.asarray(observations, dtype=float)
-        if allow_many and x.ndim == 3:
-            return check_array(name, x, (self.n_trials, None, self.obs_dim))
-        shape = "(n_trials, obs_dim) or (n_trials, n_obs, obs_dim)" if allow_many else "(n_trials, obs_dim)"
-        if x.shape != (self.n_trials, self.obs_dim):
-            raise ValueError(f"{name} must have shape {shape} with n_trials={self.n_trials}, "
-                             f"obs_dim={self.obs_dim}, got {x.shape}")
-        return check_array(name, x, (self.n_trials, self.obs_dim))
+    # These run on every step, so they are lean: no copy of an array that is already float64, and
+    # (with ``finite=False``) the NaN/inf scan is left to the compiled kernel, which does it
+    # before it changes anything.
+    @staticmethod
+    def _floats(name: str, value) -> np.ndarray:
+        if type(value) is np.ndarray and value.dtype == np.float64:
+            return value
+        try:
+            return np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}") from None
 
-    def _check_learn(self, rewards, next_observations, terminal) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _check_observations(self, observations, *, allow_many=False, name="observations",
+                            finite=True) -> np.ndarray:
+        x = self._floats(name, observations)
+        n, d = self.n_trials, self.obs_dim
+        if not (x.shape == (n, d) or (allow_many and x.ndim == 3 and x.shape[0] == n and x.shape[2] == d)):
+            shape = "(n_trials, obs_dim)" + (" or (n_trials, n_obs, obs_dim)" if allow_many else "")
+            raise ValueError(f"{name} must have shape {shape} with n_trials={n}, obs_dim={d}, got {x.shape}")
+        if finite and not np.isfinite(x).all():
+            raise ValueError(f"{name} must be finite, got NaN or inf")
+        return x
+
+    def _check_learn(self, rewards, next_observations, terminal, *, finite=True):
+        """``(rewards, bootstrap, next_observations)`` checked; see ``_check_observations`` for ``finite``."""
         if not self._pending:
             raise ValueError("learn() needs a preceding act(): call act(observations) first")
-        r = check_array("rewards", rewards, (self.n_trials,))
-        done = np.asarray(terminal)
-        if done.dtype != np.bool_ or done.shape not in ((), (self.n_trials,)):
-            raise ValueError(f"terminal must be a bool or {self.n_trials} bools, got {terminal!r}")
-        bootstrap = np.zeros(self.n_trials, dtype=np.bool_)
-        if self.config.gamma > 0.0:
-            bootstrap |= ~np.broadcast_to(done, (self.n_trials,))
+        r = self._floats("rewards", rewards)
+        if r.shape != (self.n_trials,):
+            raise ValueError(f"rewards must have shape (n_trials,) = ({self.n_trials},), got {r.shape}")
+        if finite and not np.isfinite(r).all():
+            raise ValueError("rewards must be finite, got NaN or inf")
+        if terminal is True:
+            bootstrap = self._no_bootstrap
+        else:
+            done = np.asarray(terminal)
+            if done.dtype != np.bool_ or done.shape not in ((), (self.n_trials,)):
+                raise ValueError(f"terminal must be a bool or {self.n_trials} bools, got {terminal!r}")
+            bootstrap = self._no_bootstrap
+            if self.config.gamma > 0.0:
+                bootstrap = ~np.broadcast_to(done, (self.n_trials,))
         if next_observations is None:
-            if bootstrap.any():
+            if bootstrap is not self._no_bootstrap and bootstrap.any():
                 raise ValueError("next_observations (n_trials, obs_dim) are needed when gamma > 0 and "
                                  "a trial is not terminal")
             return r, bootstrap, self._observations
-        return r, bootstrap, self._check_observations(next_observations, name="next_observations")
+        x_next = self._check_observations(next_observations, name="next_observations", finite=finite)
+        return r, bootstrap, x_next
+
+    def _current(self) -> dict[str, float]:
+        # Seven schedule values, computed once per step (act and learn share them).
+        if self._current_t != self.t:
+            self._current_values = {name: getattr(self.config, name).value(self.t)
+                                    for name in self.config.SCHEDULES}
+            self._current_t = self.t
+        return self._current_values
 
     def parameters(self) -> dict[str, float]:
         """The current value of every schedule (at step ``t``)."""
-        return {name: getattr(self.config, name).value(self.t) for name in self.config.SCHEDULES}
+        return dict(self._current())
 
     # -- save / load ----------------------------------------------------------------------------
     def save(self, path: str | os.PathLike) -> None:

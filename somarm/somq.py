@@ -145,9 +145,11 @@ class SOMQ(LearnerBase):
         Raises:
           ValueError: wrong shape, NaN or inf.
         """
-        x = self._check_observations(observations)
+        x = self._check_observations(observations, finite=False)
+        if not _kernels.all_finite(x):  # before a random row is used
+            raise ValueError("observations must be finite, got NaN or inf")
         rows = self._streams.next()
-        values = self.parameters()
+        values = self._current()
         self._observations[...] = x
         _kernels.act_kernel(
             self._observations, self.input_weights, self.action_weights, self.q, rows,
@@ -168,8 +170,12 @@ class SOMQ(LearnerBase):
         Raises:
           ValueError: no ``act`` before, bad shapes, NaN or inf, or a missing ``next_observations``.
         """
-        r, bootstrap, x_next = self._check_learn(rewards, next_observations, terminal)
-        values = self.parameters()
+        r, bootstrap, x_next = self._check_learn(rewards, next_observations, terminal, finite=False)
+        if not _kernels.all_finite(r):
+            raise ValueError("rewards must be finite, got NaN or inf")
+        if x_next is not self._observations and not _kernels.all_finite(x_next):
+            raise ValueError("next_observations must be finite, got NaN or inf")
+        values = self._current()
         _kernels.learn_kernel(
             r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],

@@ -44,3 +44,13 @@ def test_wrong_kind_and_atomic_overwrite(tmp_path):
     motoric.save(path)  # replaces the file whole
     assert isinstance(learners.load_learner(path), MotoricMap)
     assert [p.name for p in tmp_path.iterdir()] == ["l.npz"]  # no temporary left behind
+
+
+def test_bench_learner_smoke(capsys):
+    from somarm.benchmarks.learner import main
+
+    assert main(["--steps", "20", "--repeats", "1", "--trials", "1,3"]) == 0
+    out = capsys.readouterr().out
+    assert "50x1 in, 50x1 act, 20-D" in out and "10x10 in, 8x1 act" in out and "30x1 in, 30x1 act" in out
+    rows = [line.split() for line in out.splitlines() if line.startswith(("50x1", "10x10", "30x1"))]
+    assert len(rows) == 8 and all(float(row[-1].rstrip("x")) > 0 for row in rows)

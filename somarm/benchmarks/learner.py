@@ -1,0 +1,114 @@
+"""``somarm bench learner``: microseconds per trial-step of SOM-Q act + learn, beside the reference.
+
+For the paper's map sizes and n_trials = 1, 20 and 100, the batched, compiled learner
+(``somarm.somq.SOMQ``) and the line-by-line reference (``somarm.reference.ReferenceSOMQ``, one
+trial) run the same number of steps from the same t in the same process, so their ratio is
+meaningful even on a busy machine. Observations are uniform in the box and rewards are uniform
+in [-1, 0): the learner's cost does not depend on where they come from, only on how often the
+action map learns (about half the steps here). Each figure is the best of ``--repeats`` runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..presets import get
+from ..reference import ReferenceSOMQ
+from ..somq import SOMQ, SOMQConfig
+
+__all__ = ["Case", "CASES", "time_batched", "time_reference", "main"]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One benchmarked map size: a preset's config with given observation and action dimensions."""
+
+    label: str
+    config: SOMQConfig
+    obs_dim: int
+    action_dim: int
+
+
+CASES = (
+    Case("50x1 in, 50x1 act, 2-D (Table 1)", get("table1"), 2, 2),
+    Case("50x1 in, 50x1 act, 20-D (Table 1)", get("table1"), 2, 20),
+    Case("10x10 in, 8x1 act, 2-D (Table 2)", get("table2"), 2, 2),
+    Case("30x1 in, 30x1 act, 2-D (Table 5)", get("table5"), 1, 2),
+)
+
+
+def _bounds(case: Case) -> dict[str, np.ndarray]:
+    return dict(observation_low=np.zeros(case.obs_dim), observation_high=np.ones(case.obs_dim),
+                action_low=np.full(case.action_dim, -np.pi), action_high=np.full(case.action_dim, np.pi))
+
+
+def _inputs(case: Case, n_trials: int, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(0)
+    return rng.random((n_steps, n_trials, case.obs_dim)), -rng.random((n_steps, n_trials))
+
+
+def time_batched(case: Case, n_trials: int, n_steps: int, *, t0: int = 0) -> float:
+    """Seconds per trial-step of ``SOMQ.act`` + ``learn``, starting at step ``t0``."""
+    # Warm up first: numba picks (or loads) a specialisation per array layout, and a batch of one
+    # trial has other layouts than a batch of many.
+    warm = SOMQ(case.config, n_trials=n_trials, **_bounds(case))
+    for x, r in zip(*_inputs(case, n_trials, 3), strict=True):
+        warm.act(x)
+        warm.learn(r)
+    learner = SOMQ(case.config, n_trials=n_trials, **_bounds(case))
+    learner.t = t0
+    observations, rewards = _inputs(case, n_trials, n_steps)
+    start = time.perf_counter()
+    for x, r in zip(observations, rewards, strict=True):
+        learner.act(x)
+        learner.learn(r)
+    return (time.perf_counter() - start) / (n_steps * n_trials)
+
+
+def time_reference(case: Case, n_steps: int, *, t0: int = 0) -> float:
+    """Seconds per step of the one-trial reference, starting at step ``t0``."""
+    reference = ReferenceSOMQ(case.config, **_bounds(case))
+    reference.t = t0
+    observations, rewards = _inputs(case, 1, n_steps)
+    start = time.perf_counter()
+    for x, r in zip(observations[:, 0], rewards[:, 0], strict=True):
+        reference.act(x)
+        reference.learn(r)
+    return (time.perf_counter() - start) / n_steps
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print the table; returns 0 (the targets are reported, not enforced)."""
+    parser = argparse.ArgumentParser(prog="somarm bench learner", description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer steps (a smoke run)")
+    parser.add_argument("--steps", type=int, help="steps per timing (default 2000, quick 200)")
+    parser.add_argument("--t0", type=int, default=0, help="step the schedules start at (default 0)")
+    parser.add_argument("--repeats", type=int, help="best of this many runs (default 3, quick 1)")
+    parser.add_argument("--trials", default="1,20,100", help="comma-separated n_trials (default 1,20,100)")
+    args = parser.parse_args(argv)
+    n_steps = args.steps or (200 if args.quick else 2000)
+    repeats = args.repeats or (1 if args.quick else 3)
+    trial_counts = [int(n) for n in args.trials.split(",")]
+    print(f"SOM-Q act + learn, {n_steps} steps from t = {args.t0}, best of {repeats}; "
+          "reference = line-by-line single trial (somarm.reference)")
+    print(f"{'maps':36s} {'n_trials':>8s} {'batched us/trial-step':>22s} {'reference us/step':>18s} "
+          f"{'ratio':>7s}")
+    verdict = None
+    for case in CASES:
+        reference = min(time_reference(case, max(n_steps // 4, 50), t0=args.t0) for _ in range(repeats))
+        for n_trials in trial_counts:
+            batched = min(time_batched(case, n_trials, n_steps, t0=args.t0) for _ in range(repeats))
+            ratio = reference / batched
+            print(f"{case.label:36s} {n_trials:8d} {batched * 1e6:22.3f} {reference * 1e6:18.1f} "
+                  f"{ratio:6.0f}x")
+            if case is CASES[0] and n_trials == 100:
+                verdict = (batched * 1e6, ratio)
+    if verdict is not None:
+        met = verdict[0] <= 1.0 and verdict[1] >= 20.0
+        print(f"target (n_trials = 100, 50x50 maps, 2-D actions: <= 1 us per trial-step and >= 20x the "
+              f"reference): {verdict[0]:.3f} us, {verdict[1]:.0f}x -> {'met' if met else 'NOT met'}")
+    return 0
