@@ -80,6 +80,15 @@ def test_listens_on_loopback_only_by_default(server):
     assert listening_addresses(zmq_port) == {"127.0.0.1"}
 
 
+def test_the_host_argument_is_honoured():
+    # Another loopback address: shows the bind follows --host without exposing anything.
+    with MeshcatServer(host="127.0.0.2") as other:
+        assert other.web_url.startswith("http://127.0.0.2:")
+        assert listening_addresses(other.port) == {"127.0.0.2"}
+    with pytest.raises(ValueError, match="host"):
+        MeshcatServer(host="")
+
+
 def test_commands_round_trip_and_the_url_is_reported(server):
     client = MeshcatClient(server.zmq_url, timeout_s=5.0)
     assert client.web_url() == server.web_url

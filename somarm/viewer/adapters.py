@@ -1,6 +1,6 @@
 """Where the tasks keep goals, targets and flights, read in one place for the viewer.
 
-The viewer asks the task when it can (``task.goal_positions``, ``simulate_trajectory``) and
+The viewer asks the task when it can (``task.goals_for``, ``simulate_trajectory``) and
 otherwise falls back on the models' own conventions, documented in their MJCF files: the arm
 tasks observe the goal's (x, y); a throw flies in the launcher model's x-z plane.
 """
@@ -21,8 +21,8 @@ _MAX_FLIGHT_STEPS = 2000
 
 def goal_adapter(task_name: str, task=None) -> Callable[[np.ndarray], np.ndarray] | None:
     """Observation ``(obs_dim,)`` -> goal (x, y) for the arm tasks; None means "the first two values"."""
-    if task is not None and hasattr(task, "goal_positions"):
-        return lambda observation: np.asarray(task.goal_positions(np.asarray(observation)[None]))[0, :2]
+    if task is not None and hasattr(task, "goals_for"):  # four_goals: a quadrant's goal, phase by task.t
+        return lambda observation: np.asarray(task.goals_for(np.asarray(observation)[None]))[0, :2]
     return None
 
 

@@ -19,6 +19,16 @@ from somarm.validation import check_int, check_number
 __all__ = ["LiveView"]
 
 
+def _own_task(task_name: str, task_params: dict | None):
+    """A one-trial task of our own, or None when the tasks cannot make it (then the show guesses)."""
+    try:
+        from somarm import tasks
+
+        return tasks.make(task_name, n_trials=1, **(task_params or {}))
+    except (ImportError, AttributeError):  # no task registry yet: fall back on the models' conventions
+        return None
+
+
 class LiveView:
     """Live meshcat view of one trial of a training run.
 
@@ -31,6 +41,8 @@ class LiveView:
         in the notes); lower it on a loaded machine.
       trial: which trial of the batch is shown.
       timeout_s: longest wait for the server before the viewer switches itself off.
+      task_params: the run's task parameters, so goals and targets are drawn where training
+        puts them (the viewer builds its own task object; it never touches the training's).
 
     Attributes:
       url: the page to open.
@@ -52,6 +64,7 @@ class LiveView:
         max_rate_hz: float = 30.0,
         trial: int = 0,
         timeout_s: float = 2.0,
+        task_params: dict | None = None,
     ) -> None:
         from somarm.viewer.client import MeshcatClient
         from somarm.viewer.server import MeshcatServer, stop_on_signals
@@ -60,7 +73,8 @@ class LiveView:
         rate = check_number("max_rate_hz", max_rate_hz, minimum=0.0, strict_minimum=True)
         self.trial = check_int("trial", trial, minimum=0)
         self._period = 1.0 / rate
-        self._stream = show_for_task(task_name)  # fails fast on an unknown task, before any server
+        self._task = _own_task(task_name, task_params)
+        self._stream = show_for_task(task_name, self._task)  # fails fast on an unknown task, before any server
         self._server = MeshcatServer(host=host, port=port).start()
         stop_on_signals(self._server)
         self.url: str = self._server.web_url
@@ -102,6 +116,8 @@ class LiveView:
             if frame is None:
                 continue
             step, observation, action, reward = frame
+            if hasattr(self._task, "set_step"):
+                self._task.set_step(step)  # four_goals: the goals move at a given step
             if client.send_batch(self._stream.frame(observation, action, reward)):
                 self.frames_sent += 1
 

@@ -1,0 +1,102 @@
+"""Benchmark: what watching costs a training run (``python -m somarm.viewer.bench``).
+
+Trains the same short run three ways in one process, interleaved and repeated so that
+machine noise hits each alike: without a viewer, with ``LiveView`` and no browser, and with
+``LiveView`` watched by a headless Chromium (when ``/usr/bin/chromium`` and Playwright are
+there). Prints median wall times and their ratios to the run without a viewer, plus the
+cost of one throttled ``update`` call.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+import timeit
+
+import numpy as np
+
+__all__ = ["main"]
+
+_CHROMIUM = "/usr/bin/chromium"
+_CHROMIUM_ARGS = ["--no-sandbox", "--headless=new", "--enable-unsafe-swiftshader", "--use-gl=angle",
+                  "--use-angle=swiftshader", "--disable-background-networking", "--no-first-run"]
+
+
+def _train_seconds(config, hook) -> tuple[float, int]:
+    from somarm.training import train
+
+    start = time.perf_counter()
+    result = train(config, progress=False, on_step=hook)
+    return time.perf_counter() - start, result.steps_done
+
+
+def _throttled_update_ns(view) -> float:
+    observations, actions, rewards = np.zeros((1, 2)), np.zeros((1, 2)), np.zeros(1)
+    view._next_time = time.perf_counter() + 3600.0  # throttled for the whole measurement
+    n = 200_000
+    seconds = timeit.timeit(lambda: view.update(1, observations, actions, rewards), number=n)
+    view._next_time = 0.0
+    return seconds / n * 1e9
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark; returns 0."""
+    parser = argparse.ArgumentParser(prog="python -m somarm.viewer.bench", description=__doc__.split("\n")[0])
+    parser.add_argument("--task", default="reach2")
+    parser.add_argument("--steps", type=int, default=20_000)
+    parser.add_argument("--trials", type=int, default=1)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--rate", type=float, default=30.0, help="LiveView max_rate_hz")
+    args = parser.parse_args(argv)
+
+    from somarm.training import RunConfig
+    from somarm.viewer.live import LiveView
+
+    config = RunConfig(task=args.task, n_steps=args.steps, n_trials=args.trials, block=100)
+    _train_seconds(RunConfig(task=args.task, n_steps=200, n_trials=args.trials), None)  # compile, warm caches
+    times: dict[str, list[float]] = {"no viewer": [], "LiveView, no browser": [], "LiveView + Chromium": []}
+    with LiveView(args.task, max_rate_hz=args.rate) as view:
+        print(f"viewer at {view.url}; {args.task}, {args.trials} trial(s), {args.steps} steps, "
+              f"{args.repeats} repeats, max_rate_hz={args.rate}")
+        browser = page = playwright = None
+        if os.path.exists(_CHROMIUM):
+            try:
+                from playwright.sync_api import sync_playwright
+
+                playwright = sync_playwright().start()
+                browser = playwright.chromium.launch(executable_path=_CHROMIUM, args=_CHROMIUM_ARGS)
+            except ImportError:
+                browser = None
+        for _ in range(args.repeats):
+            times["no viewer"].append(_train_seconds(config, None)[0])
+            sent = view.frames_sent
+            seconds, steps = _train_seconds(config, view.update)
+            times["LiveView, no browser"].append(seconds)
+            frames_no_browser = view.frames_sent - sent
+            if browser is not None:
+                page = browser.new_page()
+                page.goto(view.url)
+                page.wait_for_function("() => typeof viewer !== 'undefined'", timeout=30_000)
+                sent = view.frames_sent
+                times["LiveView + Chromium"].append(_train_seconds(config, view.update)[0])
+                frames_browser = view.frames_sent - sent
+                page.close()
+        print(f"throttled update(): {_throttled_update_ns(view):.0f} ns per call")
+        if browser is not None:
+            browser.close()
+            playwright.stop()
+    base = statistics.median(times["no viewer"])
+    for name, values in times.items():
+        if values:
+            median = statistics.median(values)
+            print(f"{name:22s} median {median:7.3f} s  ({steps / median:9.0f} steps/s)  ratio {median / base:6.3f}")
+    print(f"frames sent in the last timed runs: {frames_no_browser} (no browser)"
+          + (f", {frames_browser} (Chromium)" if browser is not None else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
