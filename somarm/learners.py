@@ -44,7 +44,9 @@ def __getattr__(name: str) -> Any:
         from .motoric import MotoricConfig, MotoricMap
         from .somq import SOMQ, SOMQConfig
 
-        return {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap)}
+        registry = {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap)}
+        globals()["LEARNERS"] = registry  # from now on an ordinary module attribute
+        return registry
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

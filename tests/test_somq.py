@@ -305,3 +305,17 @@ def test_conforms_to_protocol_and_exposes_grids_and_parameters():
     assert (learner.q == 0).all()
     assert (learner.action_weights >= -1).all() and (learner.action_weights <= 1).all()
     assert (learner.input_weights >= 0).all() and (learner.input_weights <= 1).all()
+
+
+def test_act_copies_the_proposed_action_and_input_init_is_used():
+    config = SOMQConfig(input_shape=(4,), action_shape=(5,), epsilon=0.5, input_init=(0.25, 0.5))
+    learner = SOMQ(config, n_trials=3, seed=1, **BOX2)
+    assert learner.input_weights.min() >= 0.25 and learner.input_weights.max() < 0.5
+    before = learner.action_weights.copy()
+    for _ in range(10):  # act without learn: step 7 is the only place the action map may move
+        actions = learner.act(np.full((3, 2), 0.3))
+    np.testing.assert_array_equal(learner.action_weights, before)
+    assert not np.isin(actions, before).any()
+    actions[...] = 99.0  # the returned array is the caller's: changing it must not reach the learner
+    learner.learn(np.zeros(3))
+    assert np.abs(learner.action_weights).max() <= 1.0
