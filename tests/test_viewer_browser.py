@@ -205,16 +205,32 @@ def test_reach20_sweep_and_throw_fan_render(browser, server, tmp_path):
     client.close()
 
 
-def test_the_static_html_opens_without_a_server(browser, tmp_path):
+def test_the_static_html_opens_without_a_server_and_animates(browser, tmp_path):
+    from somarm.viewer.sessions import arm_animation
+
     show = ArmShow(load_model("arm2"), prefix="/meshcat/offline")
+    goals, actions = np.array([[0.4, 0.5], [0.7, 0.6]]), np.array([[1.2, 0.8], [0.3, 1.5]])
     recorder = Recorder()
-    recorder.send_batch(show.setup() + show.frame(np.array([0.4, 0.5]), np.array([1.2, 0.8])))
+    recorder.send_batch(show.setup() + show.frame(goals[0], actions[0]))
+    recorder.send(arm_animation(show, goals, actions))
     path = write_html(tmp_path / "offline.html", recorder.commands())
     page = open_page(browser, path.as_uri())
     page.wait_for_function("() => typeof viewer !== 'undefined' && viewer.scene.getObjectByName('link2')")
     settle(page)
+    assert page.evaluate("() => viewer.animator.actions.length") > 0
+    assert page.evaluate("() => viewer.animator.playing")
+    # The animation holds goal 0 for its first frames: the page shows MuJoCo's pose for it.
+    page.evaluate("() => { viewer.animator.pause(); viewer.animator.seek(0.1); }")
+    settle(page)
     drawn = page.evaluate(RELATIVE_POSE, [["meshcat", "offline"], ["link2"]])
-    expected = mujoco_pose(show.model, np.array([1.2, 0.8]), np.array([[0.4, 0.5, 0.0]]), "link2")
+    expected = mujoco_pose(show.model, actions[0], np.array([[*goals[0], 0.0]]), "link2")
+    np.testing.assert_allclose(np.array(drawn["link2"]).reshape(4, 4).T, expected, atol=1e-5)
+    # ... and goal 1's pose once the clip reaches it (frame 18 + 12 at 30 fps = 1 s).
+    page.evaluate("() => viewer.animator.seek(1.05)")
+    settle(page)
+    drawn = page.evaluate(RELATIVE_POSE, [["meshcat", "offline"], ["link2"]])
+    expected = mujoco_pose(show.model, actions[1], np.array([[*goals[1], 0.0]]), "link2")
     np.testing.assert_allclose(np.array(drawn["link2"]).reshape(4, 4).T, expected, atol=1e-5)
     assert screenshot(page, tmp_path, "offline.png").std() > 10
+    assert page.foreign_requests == []
     page.close()
