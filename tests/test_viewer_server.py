@@ -231,3 +231,57 @@ def test_live_view_rejects_bad_arguments():
         LiveView("reach2", max_rate_hz=0)
     with pytest.raises(ValueError, match="unknown task"):
         LiveView("juggle")
+
+
+def _tasks_ready() -> bool:
+    try:
+        from somarm import tasks, training  # noqa: F401
+    except ImportError:
+        return False
+    return hasattr(tasks, "make") and hasattr(training, "build")
+
+
+needs_tasks = pytest.mark.skipif(not _tasks_ready(), reason="somarm.tasks.make is not in the repository yet")
+
+
+def test_cli_rejects_bad_input_in_one_line(capsys):
+    from somarm.viewer.cli import main
+
+    assert main(["juggle"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown task 'juggle'" in err[0] and "reach2" in err[0]
+    assert main(["reach2", "--goals", "0"]) == 2
+    assert "--goals" in capsys.readouterr().err
+    assert main(["reach2", "--port", "70000"]) == 2
+
+
+@needs_tasks
+@pytest.mark.parametrize("task", ["reach2", "four_goals", "reach20", "throw"])
+def test_cli_writes_an_offline_animation(task, tmp_path, capsys):
+    from somarm.viewer.cli import main
+
+    out = tmp_path / f"{task}.html"
+    assert main([task, "--html", str(out), "--goals", "3"]) == 0
+    text = out.read_text()
+    assert "MeshCat.Viewer" in text and len(text) > 500_000  # the viewer script is inlined
+    assert "mean error" in capsys.readouterr().out
+
+
+@needs_tasks
+def test_cli_serves_until_ctrl_c_and_leaves_no_server():
+    command = [sys.executable, "-m", "somarm.viewer.cli", "reach2", "--goals", "2", "--interval", "0.2"]
+    env = dict(os.environ, MUJOCO_GL="disable")
+    viewer = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = viewer.stdout.readline()
+        assert "open http://127.0.0.1:" in line, line + viewer.stderr.read()
+        port = int(line.split("http://127.0.0.1:")[1].split("/")[0])
+        assert listening_addresses(port) == {"127.0.0.1"}
+        assert "error" in viewer.stdout.readline()  # one line per goal shown
+        viewer.send_signal(signal.SIGINT)
+        assert viewer.wait(timeout=15) == 130
+        assert wait_until(lambda: not listening_addresses(port), timeout_s=10)
+    finally:
+        if viewer.poll() is None:
+            viewer.kill()
+            viewer.wait()
