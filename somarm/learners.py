@@ -174,7 +174,7 @@ def override_config(config: Any, overrides: dict[str, str]) -> Any:
                 fields[name] = parse_bool(name, text)
             elif name == "input_init":
                 low_high = str(text).replace(",", ":").split(":")
-                fields[name] = None if text.lower() == "none" else tuple(float(v) for v in low_high)
+                fields[name] = None if str(text).lower() == "none" else tuple(float(v) for v in low_high)
             elif name == "gamma":
                 fields[name] = float(text)
             else:

@@ -37,7 +37,11 @@ _F1 = InverseDecay(1000.0)
 
 @dataclass(frozen=True)
 class SOMQConfig:
-    """Everything that defines a SOM-Q learner; the defaults are Table 1's (reach2, Fig. 7)."""
+    """Everything that defines a SOM-Q learner; the defaults are Table 1's numbers (reach2, Fig. 7).
+
+    ``somarm.presets.get("table1")`` is the full Table 1 (it also starts the input weights in
+    [0, 1]). A plain number given for a schedule is taken as a constant schedule.
+    """
 
     input_shape: tuple[int, ...] = (50,)
     """Input map grid: ``(n,)`` for a line or ``(rows, cols)`` for a rectangle."""
