@@ -1,0 +1,216 @@
+"""What every one-step task shares: batched episodes from per-trial streams, checks, dm_env glue.
+
+A task is defined once, by a subclass of ``OneStepTask`` that says how uniforms become
+observations and how observations and actions become rewards. The batched interface is that
+class itself; the dm_env interface (``OneStepEnvTask``) draws its observations from the same
+stream as trial ``trial_id`` of the batch and computes its reward from its own MuJoCo physics.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import OrderedDict
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from dm_control.suite import base
+from dm_env import specs
+
+from somarm.streams import UniformStreams, trial_ids_for
+
+__all__ = ["Backend", "BACKENDS", "OneStepTask", "OneStepEnvTask", "check_actions"]
+
+Backend = Literal["mujoco", "analytic"]
+BACKENDS: tuple[str, ...] = ("mujoco", "analytic")
+
+
+def check_actions(name: str, actions: object, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """``actions`` as a float array ``(..., action_dim)``, finite and inside [low, high].
+
+    Out-of-range actions are rejected, not clipped: the learner keeps its actions inside the
+    bounds it reads from the task, so anything outside is a caller's mistake.
+
+    Raises:
+      ValueError: wrong last axis, NaN or inf, or a value outside the bounds (one line).
+    """
+    try:
+        array = np.asarray(actions, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an array of numbers, got {type(actions).__name__}") from None
+    if array.ndim == 0 or array.shape[-1] != low.size:
+        raise ValueError(f"{name} must have shape (..., {low.size}), got {array.shape}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name} must be finite, got NaN or inf")
+    if (array < low).any() or (array > high).any():
+        raise ValueError(f"{name} must lie inside [{_fmt(low)}, {_fmt(high)}], got values from "
+                         f"{_fmt(array.reshape(-1, low.size).min(axis=0))} to "
+                         f"{_fmt(array.reshape(-1, low.size).max(axis=0))}")
+    return array
+
+
+def _fmt(values: np.ndarray) -> str:
+    return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
+
+
+class OneStepTask:
+    """Batched one-step episodes for ``n_trials`` independent trials (``BatchedTask``).
+
+    Subclasses set ``name``, the bounds, ``uniform_width`` and implement ``observations_from``
+    and ``rewards``; everything else (streams, counters, checks) lives here.
+
+    Args:
+      params: the task's frozen parameters.
+      n_trials: independent trials. seed: the run's seed. trial_ids: explicit trial indices
+        (trial i sees the same observations alone or in a batch). backend: "mujoco" or "analytic".
+    """
+
+    name: ClassVar[str]
+    uniform_width: ClassVar[int]  #: uniforms drawn per observation
+    observation_low: np.ndarray
+    observation_high: np.ndarray
+    action_low: np.ndarray
+    action_high: np.ndarray
+
+    def __init__(self, params: Any, *, n_trials: int = 1, seed: int = 0,
+                 trial_ids: np.ndarray | None = None, backend: Backend = "mujoco"):
+        if backend not in BACKENDS:
+            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
+        self.params = params
+        self.backend = backend
+        self.trial_ids = trial_ids_for(n_trials, trial_ids)
+        self.n_trials = int(self.trial_ids.size)
+        self.seed = seed
+        self._streams = UniformStreams(seed, self.trial_ids, "task", self.uniform_width)
+        self._observations: np.ndarray | None = None
+        self.t = 0  #: steps taken (the learner's t)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.params!r}, n_trials={self.n_trials}, backend={self.backend!r})"
+
+    @property
+    def observation_dim(self) -> int:
+        return int(self.observation_low.size)
+
+    @property
+    def action_dim(self) -> int:
+        return int(self.action_low.size)
+
+    # -- what a task defines -------------------------------------------------------------
+    def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
+        """Observations ``(n, obs_dim)`` from rows of uniforms ``(n, uniform_width)``."""
+        raise NotImplementedError
+
+    def rewards(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        """Rewards ``(...)`` for checked ``(..., obs_dim)`` and ``(..., action_dim)`` arrays."""
+        raise NotImplementedError
+
+    # -- the BatchedTask protocol --------------------------------------------------------
+    def reset(self) -> np.ndarray:
+        """Next observation of every trial, shape ``(n_trials, obs_dim)``."""
+        self._observations = self.observations_from(self._streams.next())
+        return self._observations.copy()
+
+    def step(self, actions: np.ndarray) -> np.ndarray:
+        """Rewards ``(n_trials,)`` for actions ``(n_trials, action_dim)``; advances ``t``.
+
+        Raises:
+          ValueError: no ``reset`` before, or actions of the wrong shape, non-finite or out of bounds.
+        """
+        if self._observations is None:
+            raise ValueError(f"{self.name}: call reset() before step()")
+        actions = check_actions("actions", actions, self.action_low, self.action_high)
+        if actions.shape != (self.n_trials, self.action_dim):
+            raise ValueError(f"actions must have shape ({self.n_trials}, {self.action_dim}), got {actions.shape}")
+        rewards = self.rewards(self._observations, actions)
+        self._observations = None  # one step per episode
+        self.t += 1
+        return rewards
+
+    def evaluate(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        """Rewards ``(...)`` for ``(..., obs_dim)`` observations and ``(..., action_dim)`` actions.
+
+        Pure: no counter moves and nothing is drawn.
+        """
+        observations = np.asarray(observations, dtype=np.float64)
+        if observations.ndim == 0 or observations.shape[-1] != self.observation_dim:
+            raise ValueError(f"observations must have shape (..., {self.observation_dim}), "
+                             f"got {observations.shape}")
+        if not np.isfinite(observations).all():
+            raise ValueError("observations must be finite, got NaN or inf")
+        actions = check_actions("actions", actions, self.action_low, self.action_high)
+        try:
+            shape = np.broadcast_shapes(observations.shape[:-1], actions.shape[:-1])
+        except ValueError:
+            raise ValueError(f"observations {observations.shape} and actions {actions.shape} "
+                             "do not broadcast") from None
+        observations = np.broadcast_to(observations, (*shape, self.observation_dim))
+        actions = np.broadcast_to(actions, (*shape, self.action_dim))
+        return self.rewards(observations, actions)
+
+    def sample_observations(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` fresh observations ``(n, obs_dim)`` drawn with ``rng``."""
+        return self.observations_from(rng.random((int(n), self.uniform_width)))
+
+    def describe_params(self) -> dict[str, Any]:
+        """The task's parameters as a JSON-able dict (saved with a run)."""
+        return dataclasses.asdict(self.params)
+
+
+class OneStepEnvTask(base.Task):
+    """A dm_control ``Task`` running one episode of a ``OneStepTask`` per dm_env episode.
+
+    The observation of episode k is the k-th observation of trial ``trial_id`` of a batch
+    with the same seed; the subclass writes it into the physics (goal or target marker,
+    launch parameters), applies the action and reads the reward back from the physics.
+    """
+
+    def __init__(self, batched: OneStepTask, *, observation_key: str):
+        super().__init__(random=int(batched.seed))  # unused: draws come from the task streams
+        self.batched = batched
+        self._key = observation_key
+        self._observation = np.zeros(batched.observation_dim)
+        self._reward: float | None = None
+
+    def initialize_episode(self, physics) -> None:
+        self._observation = self.batched.reset()[0]
+        self._reward = None
+        self.apply_observation(physics, self._observation)
+
+    def before_step(self, action, physics) -> None:
+        action = check_actions("action", action, self.batched.action_low, self.batched.action_high)
+        if action.shape != (self.batched.action_dim,):
+            raise ValueError(f"action must have shape ({self.batched.action_dim},), got {action.shape}")
+        self.apply_action(physics, action)
+
+    def after_step(self, physics) -> None:
+        self._reward = float(self.reward_from_physics(physics, self._observation))
+        self.batched.t += 1
+
+    def action_spec(self, physics):
+        return specs.BoundedArray((self.batched.action_dim,), np.float64, self.batched.action_low,
+                                  self.batched.action_high, name="action")
+
+    def observation_spec(self, physics):
+        return OrderedDict({self._key: specs.BoundedArray(
+            (self.batched.observation_dim,), np.float64, self.batched.observation_low,
+            self.batched.observation_high, name=self._key)})
+
+    def get_observation(self, physics):
+        return OrderedDict({self._key: self._observation.copy()})
+
+    def get_reward(self, physics) -> float:
+        return 0.0 if self._reward is None else self._reward
+
+    def get_termination(self, physics):
+        # One-step episodes: the episode ends (terminal, discount 0) right after its only action.
+        return None if self._reward is None else 0.0
+
+    # -- what a task's dm_env side defines -----------------------------------------------
+    def apply_observation(self, physics, observation: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def apply_action(self, physics, action: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def reward_from_physics(self, physics, observation: np.ndarray) -> float:
+        raise NotImplementedError

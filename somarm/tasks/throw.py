@@ -1,0 +1,174 @@
+"""Throw a projectile at a target (Smith 2002, sections 5.3 to 5.5, Tables 3 and 6).
+
+``throw`` has a single state (target X = 4, the environment of Table 3); ``throw_distance``,
+``throw_wind``, ``throw_friction`` and ``throw_mass`` are experiments A to D of Table 6, whose
+observation is the varied parameters (in the order X, W, Fr, M) drawn uniformly. The action is
+the launch velocity (u_x, u_y) in [0, 1]^2; the reward is ``-|X - landing x|``, minus 2 more
+for throws below 45 degrees (u_y < u_x) when ``punish_low`` is set (the footnote of Fig. 25).
+
+Table 6 asks that every target be reachable from the velocity square, but its box is not:
+with no wind and Fr = 0.2, M = 1 the longest throw lands near 5.0, short of X = 9. So each
+observation is drawn uniformly from the reachable part of the box: up to 16 candidate points
+per row of uniforms, the first reachable one kept (this project's choice; see ``_pick``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from somarm import ballistics
+from somarm.tasks import flight
+from somarm.tasks.base import OneStepTask, check_actions
+
+__all__ = ["RANGES", "VARIED", "TABLE3", "ThrowParams", "Throw", "landing_x", "throw_rewards"]
+
+#: Table 6's ranges of the varied parameters.
+RANGES: dict[str, tuple[float, float]] = {"X": (0.0, 9.0), "W": (-3.0, 0.0), "Fr": (0.0, 0.2), "M": (1.0, 2.0)}
+#: The varied parameters of each throw task, in observation order.
+VARIED: dict[str, tuple[str, ...]] = {
+    "throw": (),
+    "throw_distance": ("X",),
+    "throw_wind": ("X", "W"),
+    "throw_friction": ("X", "W", "Fr"),
+    "throw_mass": ("X", "W", "Fr", "M"),
+}
+_CANDIDATES = 16
+_PUNISHMENT = 2.0
+
+
+@dataclasses.dataclass(frozen=True)
+class ThrowParams:
+    """The environment of Table 3; a throw_* task draws its varied fields instead."""
+
+    M: float = 1.0  #: mass of the projectile (> 0)
+    G: float = 0.05  #: gravity (> 0)
+    Fr: float = 0.1  #: coefficient of air resistance (>= 0), horizontal only
+    W: float = 0.0  #: horizontal wind speed against the thrower
+    X: float = 4.0  #: horizontal position of the target
+    punish_low: bool = False  #: add -2 to throws below 45 degrees (Fig. 25)
+    tolerance: float = flight.DEFAULT_TOLERANCE  #: landing error bound picking the MuJoCo step
+
+    def __post_init__(self):
+        for name, low, strict in (("M", 0.0, True), ("G", 0.0, True), ("Fr", 0.0, False),
+                                  ("W", None, False), ("X", None, False), ("tolerance", 0.0, True)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
+            if low is not None and (value <= low if strict else value < low):
+                raise ValueError(f"{name} must be {'>' if strict else '>='} {low}, got {value!r}")
+        if not isinstance(self.punish_low, bool):
+            raise ValueError(f"punish_low must be true or false, got {self.punish_low!r}")
+
+
+#: The environment of Table 3 (the defaults of ``ThrowParams``).
+TABLE3 = ThrowParams()
+
+
+def _check_velocities(ux, uy) -> tuple[np.ndarray, np.ndarray]:
+    velocities = check_actions("velocities", np.stack(np.broadcast_arrays(
+        np.asarray(ux, dtype=np.float64), np.asarray(uy, dtype=np.float64)), axis=-1),
+        np.zeros(2), np.ones(2))
+    return velocities[..., 0], velocities[..., 1]
+
+
+def landing_x(ux, uy, *, params: ThrowParams = TABLE3, Fr=None, W=None, M=None,
+              backend: str = "mujoco") -> np.ndarray:
+    """Landing x of throws, simulated in MuJoCo (default) or from Eq. 7.
+
+    Args:
+      ux, uy: launch velocities in [0, 1] (out-of-range values are rejected, not clipped).
+      params: G, the tolerance, and the defaults of Fr, W and M.
+      Fr, W, M: optional per-throw arrays overriding ``params``; everything broadcasts.
+      backend: "mujoco" or "analytic".
+
+    Returns:
+      Landing x of the broadcast shape.
+
+    Raises:
+      ValueError: velocities outside [0, 1], NaN or inf, or an unknown backend.
+    """
+    ux, uy = _check_velocities(ux, uy)
+    Fr = params.Fr if Fr is None else np.asarray(Fr, dtype=np.float64)
+    W = params.W if W is None else np.asarray(W, dtype=np.float64)
+    M = params.M if M is None else np.asarray(M, dtype=np.float64)
+    if backend == "analytic":
+        return ballistics.landing_x(ux, uy, G=params.G, Fr=Fr, W=W, M=M)
+    if backend != "mujoco":
+        raise ValueError(f"unknown backend {backend!r}; backends: mujoco, analytic")
+    return flight.landing_x(ux, uy, G=params.G, Fr=Fr, W=W, M=M, tolerance=params.tolerance)
+
+
+def throw_rewards(landing: np.ndarray, X, ux, uy, *, punish_low: bool) -> np.ndarray:
+    """``-|X - landing|``, minus 2 for throws below 45 degrees when ``punish_low``."""
+    rewards = -np.abs(np.asarray(X) - landing)
+    if punish_low:
+        rewards = rewards - _PUNISHMENT * (np.asarray(uy) < np.asarray(ux))
+    return rewards
+
+
+class Throw(OneStepTask):
+    """Batched throw task; ``varied`` names the parameters drawn per episode (Table 6)."""
+
+    def __init__(self, params: ThrowParams, *, name: str, **kwargs):
+        self.name = name
+        self.varied = VARIED[name]
+        if self.varied:
+            low = np.array([RANGES[v][0] for v in self.varied])
+            high = np.array([RANGES[v][1] for v in self.varied])
+        else:
+            lowest, highest = ballistics.landing_range(G=params.G, Fr=params.Fr, W=params.W, M=params.M)
+            if not lowest <= params.X <= highest:
+                raise ValueError(f"target X = {params.X:g} is out of reach: throws from the velocity "
+                                 f"square land between {float(lowest):.4g} and {float(highest):.4g}")
+            low, high = np.array([min(0.0, params.X)]), np.array([max(RANGES["X"][1], params.X)])
+        self.observation_low, self.observation_high = low, high
+        self.action_low, self.action_high = np.zeros(2), np.ones(2)
+        self.uniform_width = max(1, _CANDIDATES * len(self.varied))
+        super().__init__(params, **kwargs)
+
+    def conditions(self, observations: np.ndarray) -> dict[str, np.ndarray | float]:
+        """X, W, Fr and M of each observation ``(..., obs_dim)``: drawn fields or the params'."""
+        values: dict[str, np.ndarray | float] = {k: getattr(self.params, k) for k in ("X", "W", "Fr", "M")}
+        for i, key in enumerate(self.varied):
+            values[key] = observations[..., i]
+        return values
+
+    def reachable(self, observations: np.ndarray) -> np.ndarray:
+        """Whether each observation's target lies within reach of the velocity square."""
+        c = self.conditions(observations)
+        lowest, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+        return (lowest <= c["X"]) & (c["X"] <= highest)
+
+    def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
+        if not self.varied:
+            return np.full((len(uniforms), 1), self.params.X)
+        d = len(self.varied)
+        candidates = self.observation_low + (self.observation_high - self.observation_low) * (
+            uniforms.reshape(len(uniforms), _CANDIDATES, d))
+        return self._pick(candidates)
+
+    def _pick(self, candidates: np.ndarray) -> np.ndarray:
+        """The first reachable of each row's candidates ``(n, 16, d)``.
+
+        Rejection keeps the draw uniform over the reachable part of the box. A row whose 16
+        candidates all miss (probability below 1e-12 for Table 6) keeps its first candidate
+        with X pulled back to the farthest reachable landing.
+        """
+        ok = self.reachable(candidates)
+        first = np.argmax(ok, axis=1)
+        chosen = candidates[np.arange(len(candidates)), first].copy()
+        missed = ~ok.any(axis=1)
+        if missed.any():
+            c = self.conditions(chosen[missed])
+            _, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+            chosen[missed, 0] = np.minimum(chosen[missed, 0], highest)
+        return chosen
+
+    def rewards(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        c = self.conditions(observations)
+        ux, uy = actions[..., 0], actions[..., 1]
+        landing = landing_x(ux, uy, params=self.params, Fr=c["Fr"], W=c["W"], M=c["M"], backend=self.backend)
+        return throw_rewards(landing, c["X"], ux, uy, punish_low=self.params.punish_low)
