@@ -48,7 +48,8 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 
     Shapes: observations ``(n_trials, obs_dim)``, input_weights ``(n_trials, n_s, obs_dim)``,
     action_weights ``(n_trials, n_a, action_dim)``, q ``(n_trials, n_s, n_a)``, rows
-    ``(n_trials, width)``, low/high ``(action_dim,)``, winners/units ``(n_trials,)``, actions
+    ``(n_trials, width)``, epsilon/low/high ``(action_dim,)`` (epsilon per action dimension),
+    winners/units ``(n_trials,)``, actions
     ``(n_trials, action_dim)``.
     """
     n_a = q.shape[2]
@@ -81,7 +82,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
                 noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(_TWO_PI * u2)
             else:
                 noise = 2.0 * row[3 + i] - 1.0
-            value = action_weights[trial, k, i] + noise * epsilon
+            value = action_weights[trial, k, i] + noise * epsilon[i]
             actions[trial, i] = min(max(value, low[i]), high[i])
         winners[trial] = j
         units[trial] = k

@@ -103,8 +103,9 @@ def validate_common(config: Any, *, probabilities: tuple[str, ...] = ()) -> None
         elif name in probabilities and max(value.scale, value.floor) > 1.0:
             raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
     set_field(config, "gamma", check_number("gamma", config.gamma, minimum=0.0, maximum=1.0))
-    if not isinstance(config.neighbourhood_q if hasattr(config, "neighbourhood_q") else True, bool):
-        raise ValueError(f"neighbourhood_q must be True or False, got {config.neighbourhood_q!r}")
+    for name in ("neighbourhood_q", "neighbourhood_values", "epsilon_relative"):
+        if hasattr(config, name) and not isinstance(getattr(config, name), bool):
+            raise ValueError(f"{name} must be True or False, got {getattr(config, name)!r}")
     if config.noise not in ("uniform", "gaussian"):
         raise ValueError(f"noise must be 'uniform' or 'gaussian', got {config.noise!r}")
     if config.input_init is not None:
@@ -237,6 +238,7 @@ class LearnerBase:
         self._pending = False
         self._no_bootstrap = np.zeros(self.n_trials, dtype=np.bool_)
         self._current_t = -1
+        self._epsilon_buffer = np.empty(self.action_dim)
         self._build()
 
     def _build(self) -> None:
@@ -309,6 +311,13 @@ class LearnerBase:
             return r, bootstrap, self._observations
         x_next = self._check_observations(next_observations, name="next_observations", finite=finite)
         return r, bootstrap, x_next
+
+    def _epsilons(self, epsilon: float) -> np.ndarray:
+        """The perturbation scale of each action dimension, ``(action_dim,)``."""
+        if self.config.epsilon_relative:
+            return epsilon * (self.action_high - self.action_low)
+        self._epsilon_buffer.fill(epsilon)
+        return self._epsilon_buffer
 
     def _current(self) -> dict[str, float]:
         # Seven schedule values, computed once per step (act and learn share them).

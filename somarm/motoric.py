@@ -7,7 +7,8 @@ brief (none of them is the paper's):
 
 1. The winner s_j of the observation is found as in SOM-Q (squared Euclidean distance).
 2. Its private action is COPIED and perturbed exactly as SOM-Q's step 4 (random(-1, 1) x epsilon,
-   or Gaussian), then kept inside the action bounds. There is no choice between units, so no p.
+   or Gaussian; epsilon optionally relative to each action range), then kept inside the action
+   bounds. There is no choice between units, so no p.
 3. Each input unit keeps a value estimate V (initially 0), the counterpart of SOM-Q's Q(s_j, a_k).
    If ``r + gamma * V(s'_j) > V(s_j)`` the private actions move towards the perturbed action with
    rate ``lambda_A * psi_S(j, m, N_A)``: the neighbourhood is taken on the INPUT grid (as in Ritter,
@@ -64,14 +65,14 @@ class MotoricConfig:
     """Update the value estimates of neighbouring units too (the counterpart of +NL)."""
     noise: Literal["uniform", "gaussian"] = "uniform"
     """Perturbation: ``uniform`` random(-1, 1) x epsilon, or ``gaussian`` N(0, 1) x epsilon."""
+    epsilon_relative: bool = False
+    """Read epsilon as a fraction of each action dimension's range (high - low) instead of in action units."""
     input_init: tuple[float, float] | None = None
     """Range of the initial input weights in every dimension; None = the observation bounds."""
 
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "epsilon")
 
     def __post_init__(self) -> None:
-        if not isinstance(self.neighbourhood_values, bool):
-            raise ValueError(f"neighbourhood_values must be True or False, got {self.neighbourhood_values!r}")
         validate_common(self)
 
     def to_dict(self) -> dict[str, Any]:
@@ -131,7 +132,7 @@ class MotoricMap(LearnerBase):
         self._winners[...] = winners(self.input_weights, x)
         self._units[...] = self._winners
         proposed = self.action_weights[self._rows, self._winners]  # fancy indexing: a copy
-        perturbed = proposed + noise * self.config.epsilon.value(self.t)
+        perturbed = proposed + noise * self._epsilons(self.config.epsilon.value(self.t))
         self._actions[...] = np.minimum(np.maximum(perturbed, self.action_low), self.action_high)
         self._pending = True
         return self._actions.copy()

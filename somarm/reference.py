@@ -86,6 +86,7 @@ class ReferenceSOMQ:
         # Step 4: perturb each element by random(-1, 1) * epsilon (or Gaussian * epsilon) and keep
         # the result inside the action bounds.
         epsilon = cfg.epsilon.value(t)
+        span = self.action_high - self.action_low
         perturbed = np.empty_like(proposed)
         for i in range(proposed.size):
             if cfg.noise == "gaussian":
@@ -93,7 +94,8 @@ class ReferenceSOMQ:
                 noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(2.0 * math.pi * u2)
             else:
                 noise = 2.0 * row[3 + i] - 1.0
-            value = proposed[i] + noise * epsilon
+            scale = epsilon * span[i] if cfg.epsilon_relative else epsilon
+            value = proposed[i] + noise * scale
             perturbed[i] = min(max(value, self.action_low[i]), self.action_high[i])
         self._last = (x, j, k, perturbed)
         # Step 5: output the perturbed action.

@@ -9,6 +9,9 @@ action boxes, observations, actions and rewards. Rules where the paper is brief:
   at the same t, and ``learn`` advances it.
 - the perturbed action is a copy of the chosen unit's weights plus noise, clipped to the action
   bounds (the algorithm's "keep inside"); bad observations and rewards are rejected, never clipped.
+- epsilon is in action units, as Table 1 reads literally; ``epsilon_relative=True`` reads it as a
+  fraction of each action range instead (the paper plots angles normalised to [0, 1], and with
+  that reading Table 1's 0.1 becomes 0.63 rad; which one the paper used is not stated).
 - delayed reward (gamma > 0): s'_j is the winner of the next observation before this step's
   input-map update; terminal trials use the reward alone.
 - ``predict`` is greedy: the best Q for the winning input unit, ties to the lowest index, no
@@ -67,6 +70,8 @@ class SOMQConfig:
     """Neighbourhood Q-learning (+NL); False updates only the winning pair (-NL)."""
     noise: Literal["uniform", "gaussian"] = "uniform"
     """Perturbation: ``uniform`` random(-1, 1) x epsilon (the paper's), or ``gaussian`` N(0, 1) x epsilon."""
+    epsilon_relative: bool = False
+    """Read epsilon as a fraction of each action dimension's range (high - low) instead of in action units."""
     input_init: tuple[float, float] | None = None
     """Range of the initial input weights in every dimension; None = the observation bounds."""
 
@@ -157,7 +162,7 @@ class SOMQ(LearnerBase):
         self._observations[...] = x
         _kernels.act_kernel(
             self._observations, self.input_weights, self.action_weights, self.q, rows,
-            values["p"], values["epsilon"], self.action_low, self.action_high,
+            values["p"], self._epsilons(values["epsilon"]), self.action_low, self.action_high,
             self.config.noise == "gaussian", self._winners, self._units, self._actions,
         )
         self._pending = True

@@ -1,5 +1,7 @@
 """The batched, compiled SOM-Q equals the line-by-line reference of the paper's ten steps EXACTLY."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -70,3 +72,11 @@ def test_reference_keeps_actions_inside_bounds_and_copies_the_unit():
     assert (actions >= BOUNDS["action_low"]).all() and (actions <= BOUNDS["action_high"]).all()
     # epsilon = 0.4 on a box of width 2 to 4: some perturbations really move away from the units.
     assert np.abs(actions[:, None, :] - before[None]).min(axis=(1, 2)).max() > 1e-3
+
+
+def test_relative_epsilon_equals_reference_exactly():
+    config = dataclasses.replace(_config((3, 2), True, 0.0), epsilon_relative=True)
+    batched, references = _run_both(config, n_steps=80)
+    for i, ref in enumerate(references):
+        np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
+        np.testing.assert_array_equal(batched.q[i], ref.q)

@@ -319,3 +319,19 @@ def test_act_copies_the_proposed_action_and_input_init_is_used():
     actions[...] = 99.0  # the returned array is the caller's: changing it must not reach the learner
     learner.learn(np.zeros(3))
     assert np.abs(learner.action_weights).max() <= 1.0
+
+
+def test_relative_epsilon_scales_with_each_action_range():
+    box = dict(observation_low=[0.0], observation_high=[1.0], action_low=[0.0, -100.0],
+               action_high=[1.0, 100.0])
+    steps = []
+    for relative in (False, True):
+        config = SOMQConfig(input_shape=(1,), action_shape=(1,), p=0.0, epsilon=0.01,
+                            epsilon_relative=relative)
+        learner = SOMQ(config, n_trials=200, seed=0, **box)
+        learner.action_weights[...] = [0.5, 0.0]  # far from the bounds: nothing is clipped
+        steps.append(np.abs(learner.act(np.zeros((200, 1))) - [0.5, 0.0]))
+    assert steps[0].max() <= 0.01 and steps[0][:, 1].max() > 0.009  # absolute: 0.01 in both dimensions
+    assert steps[1][:, 0].max() <= 0.01 and steps[1][:, 1].max() <= 2.0 and steps[1][:, 1].max() > 1.8
+    np.testing.assert_allclose(steps[1][:, 1], 200 * steps[0][:, 1], rtol=1e-12)  # same draws, scaled
+    assert SOMQConfig().with_overrides({"epsilon_relative": "true"}).epsilon_relative
