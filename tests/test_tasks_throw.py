@@ -1,0 +1,121 @@
+"""The throw tasks: simulated landings against Eq. 7, Eq. 8 in simulation, reachable targets."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from somarm import ballistics, tasks
+from somarm.tasks import flight, launcher
+from somarm.tasks.throw import RANGES, TABLE3, ThrowParams, landing_x
+
+
+def _random_throws(n, seed):
+    rng = np.random.default_rng(seed)
+    # Continuous u_y (not a 0.05 grid, where flights end on whole steps and hide interpolation error).
+    return {"ux": rng.random(n), "uy": rng.random(n), "W": rng.uniform(*RANGES["W"], n),
+            "Fr": rng.uniform(*RANGES["Fr"], n), "M": rng.uniform(*RANGES["M"], n)}
+
+
+def test_simulated_landing_equals_eq_7_over_random_throws():
+    throws = _random_throws(3000, 0)
+    simulated = landing_x(throws["ux"], throws["uy"], Fr=throws["Fr"], W=throws["W"], M=throws["M"])
+    exact = ballistics.landing_x(throws["ux"], throws["uy"], Fr=throws["Fr"], W=throws["W"], M=throws["M"])
+    error = np.abs(simulated - exact)
+    assert error.max() <= 1e-6, f"largest landing error {error.max():.2e}"
+    # Each throw also respects the a-priori bound its step was chosen by (plus rounding).
+    step = flight.step_for(throws["ux"], throws["W"], throws["Fr"] / throws["M"])
+    bound = flight.error_bound(throws["ux"], throws["W"], throws["Fr"] / throws["M"], step)
+    assert (error <= bound + 1e-11).all()
+
+
+def test_simulated_landing_with_wind_against_the_thrower_and_no_drag():
+    rng = np.random.default_rng(1)
+    ux, uy = rng.random(500), rng.random(500)
+    for params in ({"W": 0.8, "Fr": 0.1, "M": 1.0}, {"W": -2.0, "Fr": 0.0, "M": 1.5}):
+        simulated = landing_x(ux, uy, **params)
+        np.testing.assert_allclose(simulated, ballistics.landing_x(ux, uy, **params), rtol=0, atol=1e-6)
+
+
+def test_a_throw_lands_at_the_same_x_alone_or_in_a_batch():
+    throws = _random_throws(700, 2)
+    batch = landing_x(throws["ux"], throws["uy"], Fr=throws["Fr"], W=throws["W"], M=throws["M"])
+    for i in (0, 123, 699):
+        alone = landing_x(throws["ux"][i], throws["uy"][i], Fr=throws["Fr"][i], W=throws["W"][i], M=throws["M"][i])
+        assert float(alone) == batch[i]
+
+
+@pytest.mark.parametrize("params", [TABLE3, ThrowParams(X=7.5, W=-2.0, Fr=0.17, M=1.6)])
+def test_points_of_eq_8_land_on_the_target_in_simulation(params):
+    uy = np.linspace(0.0, 1.0, 997)
+    ux = ballistics.solution_ux(uy, X=params.X, G=params.G, Fr=params.Fr, W=params.W, M=params.M)
+    ok = ~np.isnan(ux)
+    assert ok.sum() > 50
+    simulated = landing_x(ux[ok], uy[ok], params=params)
+    np.testing.assert_allclose(simulated, params.X, rtol=0, atol=1e-6)
+    task = tasks.make("throw", X=params.X, W=params.W, Fr=params.Fr, M=params.M)
+    rewards = task.evaluate(np.array([params.X]), np.stack([ux[ok], uy[ok]], axis=-1))
+    assert rewards.min() >= -1e-6
+
+
+def test_simulate_trajectory_ends_at_the_located_landing_point():
+    params = ThrowParams(W=-1.0, Fr=0.15, M=1.2)
+    times, xy = launcher.simulate_trajectory(0.6, 0.43, params)
+    assert times.shape == (len(xy),) and xy.shape[1] == 2
+    np.testing.assert_array_equal(xy[0], [0.0, 0.0])
+    assert (np.diff(times) > 0).all() and (xy[1:-1, 1] > 0).all() and xy[-1, 1] == 0.0
+    assert times[-1] == pytest.approx(ballistics.flight_time(0.43), abs=1e-12)
+    assert xy[-1, 0] == pytest.approx(ballistics.landing_x(0.6, 0.43, Fr=0.15, W=-1.0, M=1.2), abs=1e-6)
+    assert xy[-1, 0] == float(landing_x(0.6, 0.43, params=params))  # the same flight as the tasks'
+    fine_times, _ = launcher.simulate_trajectory(0.6, 0.43, params, dt=0.05)
+    assert len(fine_times) > len(times)
+    with pytest.raises(ValueError, match="dt must be"):
+        launcher.simulate_trajectory(0.6, 0.43, params, dt=0.0)
+
+
+@pytest.mark.parametrize("name", ["throw_distance", "throw_wind", "throw_friction", "throw_mass"])
+def test_every_sampled_target_is_reachable(name):
+    task = tasks.make(name, n_trials=200, seed=4)
+    observations = np.concatenate([task.reset() for _ in range(10)]
+                                  + [task.sample_observations(np.random.default_rng(0), 5000)])
+    assert task.reachable(observations).all()
+    c = task.conditions(observations)
+    lowest, highest = ballistics.landing_range(G=task.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+    assert (c["X"] <= highest).all() and (c["X"] >= lowest).all()
+
+
+def test_table_6_box_holds_unreachable_targets_that_the_sampler_avoids():
+    task = tasks.make("throw_friction")
+    rng = np.random.default_rng(5)
+    box = task.observation_low + (task.observation_high - task.observation_low) * rng.random((20000, 3))
+    unreachable = ~task.reachable(box)
+    assert 0.0 < unreachable.mean() < 0.05  # a corner: little wind, strong drag, far target
+    assert not task.reachable(np.array([[9.0, 0.0, 0.2]]))[0]  # lands near 5.0 at best
+    sampled = task.sample_observations(rng, 20000)
+    # Uniform over the reachable part: the mean X is the reachable box's mean X.
+    assert sampled[:, 0].mean() == pytest.approx(box[~unreachable, 0].mean(), abs=0.1)
+
+
+def test_distance_task_covers_the_whole_range():
+    sampled = tasks.make("throw_distance").sample_observations(np.random.default_rng(6), 20000)
+    assert sampled.min() < 0.01 and sampled.max() > 8.99  # Table 3's air reaches 9.82: nothing rejected
+    assert sampled.mean() == pytest.approx(4.5, abs=0.1)
+
+
+@pytest.mark.parametrize("backend", ["mujoco", "analytic"])
+def test_punishment_for_throws_below_45_degrees(backend):
+    plain = tasks.make("throw_wind", backend=backend)
+    punished = tasks.make("throw_wind", backend=backend, punish_low=True)
+    observations = np.array([[4.0, -1.0]] * 3)
+    actions = np.array([[0.6, 0.3], [0.3, 0.6], [0.5, 0.5]])  # below, above, exactly 45 degrees
+    difference = punished.evaluate(observations, actions) - plain.evaluate(observations, actions)
+    np.testing.assert_allclose(difference, [-2.0, 0.0, 0.0])
+
+
+def test_velocities_outside_the_square_are_rejected():
+    with pytest.raises(ValueError, match=r"velocities must lie inside \[\(0, 0\), \(1, 1\)\]"):
+        landing_x(1.01, 0.5)
+    with pytest.raises(ValueError, match="finite"):
+        landing_x(np.nan, 0.5)
+    with pytest.raises(ValueError, match="backends"):
+        landing_x(0.5, 0.5, backend="exact")
