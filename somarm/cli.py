@@ -1,4 +1,4 @@
-"""The ``somarm`` command line: tasks, train, evaluate, reproduce, bench, view."""
+"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view."""
 
 from __future__ import annotations
 
@@ -6,37 +6,192 @@ import argparse
 import importlib
 import os
 import sys
+from pathlib import Path
 
 __all__ = ["main"]
 
 _BENCHMARKS = ("learner", "tasks")
 
 
-def _bench(argv: list[str]) -> int:
-    if not argv or argv[0] not in _BENCHMARKS:
-        print(f"somarm bench: name one of: {', '.join(_BENCHMARKS)}", file=sys.stderr)
-        return 2
-    module = importlib.import_module(f"somarm.benchmarks.{argv[0]}")
-    return int(module.main(argv[1:]) or 0)
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error in one line (``somarm: error: ...``)."""
+
+    def error(self, message: str):  # noqa: D401 - argparse's signature
+        raise ValueError(message)
 
 
-def _view(argv: list[str]) -> int:
-    module = importlib.import_module("somarm.viewer.cli")
-    return int(module.main(argv) or 0)
+def _check_writable(folder: Path) -> Path:
+    """Create ``folder`` and prove it is writable before any long work starts."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".somarm-write-test"
+        probe.write_text("ok")
+        probe.unlink()
+    except OSError as exc:
+        raise ValueError(f"--out {folder} is not writable: {exc.strerror or exc}") from None
+    return folder
+
+
+def _cmd_tasks(args) -> int:
+    from somarm import tasks
+
+    for name in tasks.names():
+        print(f"{name:16s} {tasks.describe(name)}")
+    return 0
+
+
+def _cmd_presets(args) -> int:
+    from somarm import presets
+
+    for name in presets.PRESETS:
+        print(f"{name:10s} {presets.describe(name)}")
+    return 0
+
+
+def _cmd_train(args) -> int:
+    from somarm import evaluation, training
+
+    config = training.RunConfig(
+        task=args.task,
+        learner=args.learner,
+        preset=args.preset,
+        overrides=training.parse_assignments(args.set, "--set"),
+        task_params=training.parse_assignments(args.task_set, "--task-set"),
+        n_trials=args.trials,
+        n_steps=args.steps,
+        seed=args.seed,
+        backend=args.backend,
+        block=args.block,
+    ).resolved()
+    out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
+    training.build(config)  # fail fast on a bad preset, --set or --task-set before any output
+    hook = None
+    view = None
+    if args.view:
+        from somarm.viewer.live import LiveView
+
+        view = LiveView(config.task, host=args.host, port=args.port)
+        print(f"viewer: {view.url}", flush=True)
+        hook = view.update
+    try:
+        result = training.train(config, progress=not args.no_progress, on_step=hook)
+    finally:
+        if view is not None:
+            view.close()
+    extra = {}
+    if result.steps_done > 0:
+        greedy = evaluation.evaluate_greedy(result.learner, result.task, seed=config.seed)
+        extra = {
+            "greedy_mean_reward": float(greedy.mean()),
+            "greedy_sd_reward": float(greedy.std()),
+            "greedy_observations": 1000,
+        }
+    training.write_run(result, out, figures=not args.no_figures, extra_summary=extra)
+    if result.interrupted:
+        print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
+        return 130
+    mean = extra.get("greedy_mean_reward", float("nan"))
+    print(
+        f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
+        f"greedy mean reward {mean:+.4f}; results in {out}"
+    )
+    return 0
+
+
+def _cmd_evaluate(args) -> int:
+    from somarm import evaluation, tasks, training
+
+    config, learner = training.load_run(args.run)
+    task = tasks.make(
+        config.task,
+        n_trials=learner.n_trials,
+        seed=config.seed,
+        backend=config.backend,
+        **{k: training._task_value(v) for k, v in config.task_params.items()},
+    )
+    if hasattr(task, "set_step"):
+        task.set_step(learner.t)  # tasks whose goals move (four_goals) evaluate in the learned phase
+    rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=args.seed)
+    print(
+        f"{config.task}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "
+        f"{learner.n_trials} trial(s), {args.observations} fresh observations, seed {args.seed})"
+    )
+    return 0
+
+
+def _cmd_reproduce(args) -> int:
+    from somarm.reproduce import runner
+
+    out = _check_writable(Path(args.out))
+    return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
+
+
+def _cmd_forward(module: str, argv: list[str]) -> int:
+    return int(importlib.import_module(module).main(argv) or 0)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub.add_parser("tasks", help="list the registered tasks").set_defaults(func=_cmd_tasks)
+    sub.add_parser("presets", help="list the paper's parameter tables").set_defaults(func=_cmd_presets)
+
+    train = sub.add_parser("train", help="train headless and write a run folder")
+    train.add_argument("task", help="task name (see `somarm tasks`)")
+    train.add_argument("--learner", default="somq", help="somq (default) or motoric")
+    train.add_argument("--preset", help="parameter table (see `somarm presets`); default: the task's")
+    train.add_argument("--set", action="append", metavar="KEY=VALUE", help="change a learner setting")
+    train.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
+    train.add_argument("--trials", type=int, default=1, help="independent trials (default 1)")
+    train.add_argument("--steps", type=int, help="training steps (default: the task's)")
+    train.add_argument("--seed", type=int, default=0, help="the run's seed (default 0)")
+    train.add_argument("--out", help="run folder (default runs/TASK__LEARNER__seedS)")
+    train.add_argument("--backend", default="mujoco", help="mujoco (default) or analytic")
+    train.add_argument("--block", type=int, default=100, help="steps per learning-curve point")
+    train.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    train.add_argument("--no-progress", action="store_true", help="no progress bar")
+    train.add_argument("--view", action="store_true", help="stream to a meshcat browser viewer")
+    train.add_argument("--host", default="127.0.0.1", help="viewer host (default 127.0.0.1)")
+    train.add_argument("--port", type=int, help="viewer web port (default: a free one)")
+    train.set_defaults(func=_cmd_train)
+
+    evaluate = sub.add_parser("evaluate", help="greedy mean reward of a trained run")
+    evaluate.add_argument("run", help="run folder written by `somarm train`")
+    evaluate.add_argument("--observations", type=int, default=1000, help="fresh observations (1000)")
+    evaluate.add_argument("--seed", type=int, default=0, help="seed of the fresh observations")
+    evaluate.set_defaults(func=_cmd_evaluate)
+
+    reproduce = sub.add_parser("reproduce", help="run every experiment of the paper and write REPORT.md")
+    reproduce.add_argument("--quick", action="store_true", help="reduced trial counts (a smoke test)")
+    reproduce.add_argument("--out", default="reproduce", help="output folder (default ./reproduce)")
+    reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
+    reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
+    reproduce.set_defaults(func=_cmd_reproduce)
+
+    bench = sub.add_parser("bench", help="benchmarks: learner, tasks (pass --help after the name)")
+    bench.add_argument("name", choices=_BENCHMARKS)
+    sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
+    return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``somarm`` console script."""
-    os.environ.setdefault("MUJOCO_GL", "disable")  # no rendering: the viewer is meshcat
+    """Entry point of the ``somarm`` console script; errors end in one line and exit code 2."""
+    os.environ.setdefault("MUJOCO_GL", "disable")  # no rendering here: the viewer is meshcat
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = argparse.ArgumentParser(prog="somarm", description=__doc__)
-    parser.add_argument("command", choices=["bench", "view"], help="what to do")
-    if argv and argv[0] == "bench":
-        return _bench(argv[1:])
-    if argv and argv[0] == "view":
-        return _view(argv[1:])
-    parser.parse_args(argv)
-    return 0
+    try:
+        # bench and view take their own options: forward everything after the name.
+        if argv[:1] == ["bench"] and len(argv) > 1 and argv[1] in _BENCHMARKS:
+            return _cmd_forward(f"somarm.benchmarks.{argv[1]}", argv[2:])
+        if argv[:1] == ["view"]:
+            return _cmd_forward("somarm.viewer.cli", argv[1:])
+        args = _parser().parse_args(argv)
+        return args.func(args)
+    except ValueError as exc:
+        print(f"somarm: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("somarm: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

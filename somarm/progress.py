@@ -18,8 +18,15 @@ class Progress:
       stream: where to draw (stderr by default); nothing is drawn when ``enabled`` is false.
     """
 
-    def __init__(self, total: int, *, label: str = "", stream: TextIO | None = None,
-                 enabled: bool = True, rate_hz: float = 5.0):
+    def __init__(
+        self,
+        total: int,
+        *,
+        label: str = "",
+        stream: TextIO | None = None,
+        enabled: bool = True,
+        rate_hz: float = 5.0,
+    ):
         self.total = max(1, int(total))
         self.label = label
         self.stream = stream if stream is not None else sys.stderr

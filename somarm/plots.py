@@ -1,0 +1,198 @@
+"""Figures of a training run: learning curve, input map and action map (matplotlib, headless).
+
+Imported only when figures are written, so training without figures never loads matplotlib.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from somarm.io import atomic_write_bytes  # noqa: E402
+
+__all__ = ["save", "learning_curve", "draw_input_map", "draw_action_map", "run_figures"]
+
+
+def save(fig: plt.Figure, path: str | Path) -> Path:
+    """Save a figure as PNG atomically and close it."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return atomic_write_bytes(path, buffer.getvalue())
+
+
+def learning_curve(
+    ax: plt.Axes,
+    steps: np.ndarray,
+    block_means: np.ndarray,
+    *,
+    window_blocks: int = 1,
+    label: str = "mean over trials",
+    color: str = "C0",
+    per_trial: bool = False,
+    error_bars: bool = True,
+) -> None:
+    """Mean reward over trials (moving average over ``window_blocks`` blocks) with sd error bars.
+
+    Args:
+      steps: ``(n_blocks,)`` step at the end of each block.
+      block_means: ``(n_blocks, n_trials)`` mean reward per block.
+    """
+    smoothed = moving_average(block_means, window_blocks)
+    if per_trial:
+        ax.plot(steps, smoothed, color=color, alpha=0.35, lw=0.8)
+    mean = smoothed.mean(axis=1)
+    ax.plot(steps, mean, color=color, lw=1.8, label=label)
+    if error_bars and smoothed.shape[1] > 1:
+        every = max(1, len(steps) // 20)
+        ax.errorbar(
+            steps[::every],
+            mean[::every],
+            yerr=smoothed.std(axis=1)[::every],
+            fmt="none",
+            ecolor=color,
+            capsize=2,
+            lw=0.8,
+        )
+
+
+def moving_average(block_means: np.ndarray, window_blocks: int) -> np.ndarray:
+    """Trailing mean over up to ``window_blocks`` blocks (shorter at the start), same shape."""
+    window_blocks = max(1, int(window_blocks))
+    cumulative = np.cumsum(np.vstack([np.zeros((1, block_means.shape[1])), block_means]), axis=0)
+    ends = np.arange(1, len(block_means) + 1)
+    starts = np.maximum(0, ends - window_blocks)
+    return (cumulative[ends] - cumulative[starts]) / (ends - starts)[:, None]
+
+
+def _unit_colours(n: int) -> np.ndarray:
+    return plt.get_cmap("viridis")(np.linspace(0.0, 1.0, max(n, 1)))
+
+
+def _grid_lines(ax: plt.Axes, points: np.ndarray, grid_shape: tuple[int, ...]) -> None:
+    """Join neighbouring units of a 1-D or 2-D map (points are ``(n_units, 2)`` in row-major order)."""
+    if len(grid_shape) == 2 and min(grid_shape) > 1:
+        grid = points.reshape(*grid_shape, 2)
+        for row in grid:
+            ax.plot(row[:, 0], row[:, 1], color="0.6", lw=0.7, zorder=1)
+        for col in grid.transpose(1, 0, 2):
+            ax.plot(col[:, 0], col[:, 1], color="0.6", lw=0.7, zorder=1)
+    else:
+        ax.plot(points[:, 0], points[:, 1], color="0.6", lw=0.7, zorder=1)
+
+
+def draw_input_map(
+    ax: plt.Axes,
+    weights: np.ndarray,
+    greedy: np.ndarray,
+    n_actions: int,
+    grid_shape: tuple[int, ...],
+    *,
+    labels: tuple[str, str] = ("x", "y"),
+) -> None:
+    """Input units in input space (first two dimensions), shaded by their greedy action unit.
+
+    Args:
+      weights: ``(n_input_units, obs_dim)``; a 1-D input space is drawn as unit index vs weight.
+      greedy: ``(n_input_units,)`` index of each unit's greedy action unit.
+    """
+    colours = _unit_colours(n_actions)[greedy]
+    if weights.shape[1] == 1:
+        points = np.column_stack([np.arange(len(weights)), weights[:, 0]])
+        labels = ("input unit index", labels[0])
+    else:
+        points = weights[:, :2]
+    _grid_lines(ax, points, grid_shape)
+    ax.scatter(points[:, 0], points[:, 1], c=colours, s=28, edgecolors="k", linewidths=0.4, zorder=2)
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
+
+
+def draw_action_map(
+    ax: plt.Axes,
+    weights: np.ndarray,
+    low: np.ndarray,
+    high: np.ndarray,
+    *,
+    labels: tuple[str, str] = ("action 1 (normalised)", "action 2 (normalised)"),
+    normalise: bool = True,
+) -> None:
+    """Action units in (normalised) action space, shaded by their index in the map.
+
+    2-D actions are drawn as points joined in map order; higher-dimensional ones as a heat map of
+    unit index against action dimension.
+    """
+    values = (weights - low) / (high - low) if normalise else weights
+    if values.shape[1] == 2:
+        ax.plot(values[:, 0], values[:, 1], color="0.6", lw=0.7, zorder=1)
+        ax.scatter(
+            values[:, 0],
+            values[:, 1],
+            c=_unit_colours(len(values)),
+            s=28,
+            edgecolors="k",
+            linewidths=0.4,
+            zorder=2,
+        )
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
+        if normalise:
+            ax.set_xlim(-0.02, 1.02)
+            ax.set_ylim(-0.02, 1.02)
+    else:
+        image = ax.imshow(
+            values,
+            aspect="auto",
+            cmap="viridis",
+            vmin=0 if normalise else None,
+            vmax=1 if normalise else None,
+            interpolation="nearest",
+        )
+        ax.figure.colorbar(image, ax=ax, label="normalised value" if normalise else "value")
+        ax.set_xlabel("action dimension")
+        ax.set_ylabel("action unit index")
+
+
+def run_figures(result, out: Path) -> list[Path]:
+    """The three figures of ``somarm train``: learning curve, input map, action map (trial 0)."""
+    config, learner, task = result.config, result.learner, result.task
+    paths = []
+    fig, ax = plt.subplots(figsize=(7, 4))
+    window_blocks = max(1, min(1000, config.n_steps // 10) // config.block)
+    learning_curve(
+        ax, result.steps, result.block_means, window_blocks=window_blocks, per_trial=config.n_trials <= 30
+    )
+    ax.set_xlabel("training step t")
+    ax.set_ylabel(f"mean reward (last {window_blocks * config.block} steps)")
+    ax.set_title(
+        f"{config.task}: {config.learner}, preset {config.preset}, {config.n_trials} trial(s), "
+        f"seed {config.seed}"
+    )
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right")
+    paths.append(save(fig, out / "learning_curve.png"))
+
+    input_weights = np.asarray(learner.input_weights)[0]
+    grid_shape = tuple(learner.config.input_shape)
+    if hasattr(learner, "q"):
+        greedy = np.asarray(learner.q)[0].argmax(axis=1)
+        n_actions = np.asarray(learner.q).shape[2]
+    else:  # Motoric Map: each input unit owns its action; shade by unit index
+        greedy = np.arange(len(input_weights))
+        n_actions = len(input_weights)
+    fig, ax = plt.subplots(figsize=(5, 5))
+    draw_input_map(ax, input_weights, greedy, n_actions, grid_shape)
+    ax.set_title("input map (trial 0), shaded by greedy action unit")
+    paths.append(save(fig, out / "input_map.png"))
+
+    fig, ax = plt.subplots(figsize=(5, 5))
+    draw_action_map(ax, np.asarray(learner.action_weights)[0], task.action_low, task.action_high)
+    ax.set_title("action map (trial 0), shaded by unit index")
+    paths.append(save(fig, out / "action_map.png"))
+    return paths

@@ -1,0 +1,62 @@
+import json
+
+import numpy as np
+import pytest
+
+from somarm.cli import main
+
+
+def _one_line_error(capsys, code, expected):
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("somarm: error:") and expected in err
+    assert "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_tasks_lists_every_task(capsys):
+    assert main(["tasks"]) == 0
+    out = capsys.readouterr().out
+    for name in ("reach2", "reach20", "four_goals", "throw", "throw_distance", "throw_mass"):
+        assert name in out
+
+
+def test_presets_lists_tables(capsys):
+    assert main(["presets"]) == 0
+    assert "table1" in capsys.readouterr().out
+
+
+def test_train_writes_a_rerunnable_run(tmp_path, capsys):
+    args = ["train", "throw", "--steps", "300", "--trials", "2", "--seed", "5", "--no-progress"]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    assert main([*args, "--out", str(tmp_path / "b")]) == 0
+    for name in ("config.json", "summary.json", "curves.npz", "learner.npz", "learning_curve.png"):
+        assert (tmp_path / "a" / name).is_file()
+    config = json.loads((tmp_path / "a" / "config.json").read_text())
+    assert config["seed"] == 5 and config["task"] == "throw" and config["n_steps"] == 300
+    a = np.load(tmp_path / "a" / "curves.npz")["block_means"]
+    b = np.load(tmp_path / "b" / "curves.npz")["block_means"]
+    np.testing.assert_array_equal(a, b)
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert summary["steps"] == 300 and summary["seed"] == 5 and "final_sd_reward" in summary
+    capsys.readouterr()
+    assert main(["evaluate", str(tmp_path / "a")]) == 0
+    assert "greedy mean reward" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, expected",
+    [
+        (["train", "nope"], "unknown task"),
+        (["train", "reach2", "--preset", "table99"], "table99"),
+        (["train", "reach2", "--set", "bogus=1"], "bogus"),
+        (["train", "reach2", "--set", "alpha=-1"], "alpha"),
+        (["train", "reach2", "--set", "noequals"], "KEY=VALUE"),
+        (["train", "reach2", "--trials", "0"], "trials"),
+        (["train", "reach2", "--out", "/proc/somarm-cannot-write"], "not writable"),
+        (["evaluate", "/nonexistent-run"], "not a run folder"),
+        (["reproduce", "--only", "fig99"], "unknown experiment"),
+    ],
+)
+def test_bad_input_is_one_clear_line(args, expected, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _one_line_error(capsys, main(args), expected)

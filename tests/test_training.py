@@ -1,0 +1,84 @@
+import json
+
+import numpy as np
+import pytest
+
+from somarm import training
+from somarm.training import RunConfig
+
+
+def _tiny(**kwargs):
+    base = dict(task="reach2", n_trials=2, n_steps=400, seed=3, block=100)
+    return RunConfig(**{**base, **kwargs})
+
+
+def test_same_seed_same_numbers_different_seed_differs():
+    a = training.train(_tiny(), progress=False)
+    b = training.train(_tiny(), progress=False)
+    c = training.train(_tiny(seed=4), progress=False)
+    np.testing.assert_array_equal(a.block_means, b.block_means)
+    np.testing.assert_array_equal(a.learner.q, b.learner.q)
+    assert not np.array_equal(a.block_means, c.block_means)
+    assert a.block_means.shape == (4, 2) and a.steps.tolist() == [100, 200, 300, 400]
+
+
+def test_trial_alone_equals_trial_in_batch():
+    batch = training.train(_tiny(n_trials=3), progress=False)
+    # Trial 0 alone has trial index 0: the first column of the batch.
+    alone = training.train(_tiny(n_trials=1), progress=False)
+    np.testing.assert_array_equal(batch.block_means[:, 0], alone.block_means[:, 0])
+
+
+def test_interrupt_leaves_valid_partial_run(tmp_path):
+    def stop_at_250(step, observations, actions, rewards):
+        if step == 250:
+            raise KeyboardInterrupt
+
+    result = training.train(_tiny(), progress=False, on_step=stop_at_250)
+    assert result.interrupted and result.steps_done == 250
+    assert result.block_means.shape == (2, 2)
+    training.write_run(result, tmp_path, figures=False)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["interrupted"] is True and summary["steps"] == 250 and summary["seed"] == 3
+    config, learner = training.load_run(tmp_path)
+    assert config == result.config and learner.t == 250
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_run_folder_round_trip_and_figures(tmp_path):
+    result = training.train(_tiny(), progress=False)
+    training.write_run(result, tmp_path)
+    names = {p.name for p in tmp_path.iterdir()}
+    assert {"config.json", "curves.npz", "learner.npz", "summary.json", "learning_curve.png",
+            "input_map.png", "action_map.png"} <= names
+    curves = np.load(tmp_path / "curves.npz")
+    np.testing.assert_array_equal(curves["block_means"], result.block_means)
+    assert int(curves["seed"]) == 3
+    config, learner = training.load_run(tmp_path)
+    np.testing.assert_array_equal(learner.q, result.learner.q)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"task": "nope"}, "unknown task"),
+        ({"learner": "dqn"}, "unknown learner"),
+        ({"n_trials": 0}, "trials"),
+        ({"n_steps": 0}, "steps"),
+        ({"seed": -1}, "seed"),
+    ],
+)
+def test_bad_run_settings_are_one_clear_error(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        _tiny(**kwargs).resolved()
+
+
+def test_parse_assignments():
+    assert training.parse_assignments(["a=1", " b = x "], "--set") == {"a": "1", "b": "x"}
+    with pytest.raises(ValueError, match="KEY=VALUE"):
+        training.parse_assignments(["novalue"], "--set")
+
+
+def test_load_run_names_missing_file(tmp_path):
+    with pytest.raises(ValueError, match="config.json is missing"):
+        training.load_run(tmp_path)
