@@ -9,6 +9,7 @@ by ``somarm.viewer.server``. It differs from ``meshcat-server`` where that one h
   instead of stdout, so the parent never has to keep reading a pipe;
 - nothing is printed per browser connection (meshcat's prints two lines each, which froze
   it once an unread pipe filled up);
+- with ``--live-task`` it draws a task itself from raw training rows (``feed.py``);
 - a ``batch`` request carries many commands in one round trip (a live frame of the
   20-link arm is about 25 commands);
 - ``wait`` is answered through the zmq stream (meshcat answers on the bare socket, after
@@ -95,14 +96,17 @@ class LoopbackBridge(ZMQWebSocketBridge):
             self.zmq_stream.send(b"error: a batch is (type, path, data) triples")
             return
         for k in range(0, len(frames), 3):
-            kind, path_bytes, data = frames[k : k + 3]
-            if kind.decode() not in MESHCAT_COMMANDS:
-                continue
-            for websocket in self.websocket_pool:
-                websocket.write_message(data, binary=True)
-            path = [p for p in path_bytes.decode().split("/") if p]
-            self._remember(kind.decode(), path, data)
+            kind, path, data = frames[k : k + 3]
+            self.apply_command(kind.decode(), path.decode(), data)
         self.zmq_stream.send(b"ok")
+
+    def apply_command(self, kind: str, path: str, data: bytes) -> None:
+        """Forward one packed command to every browser and remember it for later ones."""
+        if kind not in MESHCAT_COMMANDS:
+            return
+        for websocket in self.websocket_pool:
+            websocket.write_message(data, binary=True)
+        self._remember(kind, [p for p in path.split("/") if p], data)
 
     def _remember(self, kind, path, data):
         """Keep the scene tree current, as meshcat's server does, for browsers that connect later."""
@@ -147,11 +151,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--port", type=int, default=0)
     parser.add_argument("--ready-file", required=True)
     parser.add_argument("--parent-pid", type=int, default=None)
+    parser.add_argument("--live-task", default=None, help="draw this task and take LiveView frames")
+    parser.add_argument("--task-params", default="{}", help="the task's parameters as JSON")
     args = parser.parse_args(argv)
     bridge = LoopbackBridge(args.host, args.port)
     if args.parent_pid is not None:
         bridge.watch_parent(args.parent_pid)
     ready = {"zmq_url": bridge.zmq_url, "web_url": bridge.web_url, "port": bridge.fileserver_port}
+    if args.live_task is not None:
+        from somarm.viewer.feed import attach_feed
+
+        ready["feed_url"] = attach_feed(bridge, args.live_task, json.loads(args.task_params))
     tmp = args.ready_file + ".tmp"
     with open(tmp, "w", encoding="utf-8") as handle:
         json.dump(ready, handle)

@@ -3,8 +3,10 @@
 Trains the same short run three ways in one process, interleaved and repeated so that
 machine noise hits each alike: without a viewer, with ``LiveView`` and no browser, and with
 ``LiveView`` watched by a headless Chromium (when ``/usr/bin/chromium`` and Playwright are
-there). Prints median wall times and their ratios to the run without a viewer, plus the
-cost of one throttled ``update`` call.
+there). Prints median wall and CPU times and their ratios to the run without a viewer,
+plus the cost of one throttled ``update`` call. On a machine without a GPU the browser
+renders WebGL in software and competes with training for the cores: compare the CPU ratio
+(the viewer's own cost inside training) with the wall ratio (everything, browser included).
 """
 
 from __future__ import annotations
@@ -25,12 +27,13 @@ _CHROMIUM_ARGS = ["--no-sandbox", "--headless=new", "--enable-unsafe-swiftshader
                   "--use-angle=swiftshader", "--disable-background-networking", "--no-first-run"]
 
 
-def _train_seconds(config, hook) -> tuple[float, int]:
+def _train_seconds(config, hook) -> tuple[float, float, int]:
+    """Wall seconds, CPU seconds of this process, steps done."""
     from somarm.training import train
 
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     result = train(config, progress=False, on_step=hook)
-    return time.perf_counter() - start, result.steps_done
+    return time.perf_counter() - start, time.process_time() - cpu, result.steps_done
 
 
 def _throttled_update_ns(view) -> float:
@@ -57,7 +60,9 @@ def main(argv: list[str] | None = None) -> int:
 
     config = RunConfig(task=args.task, n_steps=args.steps, n_trials=args.trials, block=100)
     _train_seconds(RunConfig(task=args.task, n_steps=200, n_trials=args.trials), None)  # compile, warm caches
-    times: dict[str, list[float]] = {"no viewer": [], "LiveView, no browser": [], "LiveView + Chromium": []}
+    names = ("no viewer", "LiveView, no browser", "LiveView + Chromium")
+    times: dict[str, list[float]] = {name: [] for name in names}
+    cpu: dict[str, list[float]] = {name: [] for name in names}
     with LiveView(args.task, max_rate_hz=args.rate) as view:
         print(f"viewer at {view.url}; {args.task}, {args.trials} trial(s), {args.steps} steps, "
               f"{args.repeats} repeats, max_rate_hz={args.rate}")
@@ -71,28 +76,35 @@ def main(argv: list[str] | None = None) -> int:
             except ImportError:
                 browser = None
         for _ in range(args.repeats):
-            times["no viewer"].append(_train_seconds(config, None)[0])
+            seconds, cpu_s, steps = _train_seconds(config, None)
+            times["no viewer"].append(seconds)
+            cpu["no viewer"].append(cpu_s)
             sent = view.frames_sent
-            seconds, steps = _train_seconds(config, view.update)
+            seconds, cpu_s, steps = _train_seconds(config, view.update)
             times["LiveView, no browser"].append(seconds)
+            cpu["LiveView, no browser"].append(cpu_s)
             frames_no_browser = view.frames_sent - sent
             if browser is not None:
                 page = browser.new_page()
                 page.goto(view.url)
                 page.wait_for_function("() => typeof viewer !== 'undefined'", timeout=30_000)
                 sent = view.frames_sent
-                times["LiveView + Chromium"].append(_train_seconds(config, view.update)[0])
+                seconds, cpu_s, steps = _train_seconds(config, view.update)
+                times["LiveView + Chromium"].append(seconds)
+                cpu["LiveView + Chromium"].append(cpu_s)
                 frames_browser = view.frames_sent - sent
                 page.close()
         print(f"throttled update(): {_throttled_update_ns(view):.0f} ns per call")
         if browser is not None:
             browser.close()
             playwright.stop()
-    base = statistics.median(times["no viewer"])
-    for name, values in times.items():
-        if values:
-            median = statistics.median(values)
-            print(f"{name:22s} median {median:7.3f} s  ({steps / median:9.0f} steps/s)  ratio {median / base:6.3f}")
+    base, base_cpu = statistics.median(times["no viewer"]), statistics.median(cpu["no viewer"])
+    print("wall time is what the user waits; CPU time is what the training process itself spends")
+    for name in names:
+        if times[name]:
+            wall, cpu_s = statistics.median(times[name]), statistics.median(cpu[name])
+            print(f"{name:22s} wall {wall:7.3f} s ratio {wall / base:6.3f} | "
+                  f"training-process CPU {cpu_s:7.3f} s ratio {cpu_s / base_cpu:6.3f}")
     print(f"frames sent in the last timed runs: {frames_no_browser} (no browser)"
           + (f", {frames_browser} (Chromium)" if browser is not None else ""))
     return 0

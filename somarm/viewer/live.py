@@ -1,32 +1,50 @@
 """The training hook: stream the trial being trained to the browser, throttled, never blocking.
 
 ``update`` is called after every training step. When throttled it only reads the clock
-(well under a microsecond); otherwise it copies one trial's row and hands it to a background
-thread, which turns the newest frame into meshcat commands and sends them in one round trip.
-A frame not yet sent when a newer one arrives is dropped. If the server dies the client
-times out once, warns once, and from then on ``update`` only reads the clock.
+(about 0.2 microseconds). Otherwise it packs one trial's numbers (a few hundred bytes) and
+pushes them to the viewer's server without waiting (``zmq.NOBLOCK``); the server process
+turns the newest frame into meshcat commands and drops frames it had no time for
+(``feed.py``). Nothing in the training process waits on the server or the browser, and no
+thread competes with training for the GIL (the thread we first used cost 30% of training
+speed; see the notes). If the server dies, ``update`` notices within a second, warns once,
+and from then on only reads the clock.
 """
 
 from __future__ import annotations
 
-import threading
 import time
+import warnings
 
 import numpy as np
 
 from somarm.validation import check_int, check_number
+from somarm.viewer.client import ViewerUnavailableWarning
 
-__all__ = ["LiveView"]
+__all__ = ["LiveView", "own_task", "pack_frame"]
+
+_HEALTH_CHECK_S = 1.0
 
 
-def _own_task(task_name: str, task_params: dict | None):
-    """A one-trial task of our own, or None when the tasks cannot make it (then the show guesses)."""
+def pack_frame(step: int, observation, action, reward) -> bytes:
+    """One frame for the server's feed: float64 ``[step, reward, obs_dim, *observation, *action]``."""
+    observation, action = np.ravel(observation), np.ravel(action)
+    head = np.array([step, reward, observation.size], dtype=np.float64)
+    return np.concatenate([head, observation, action]).tobytes()
+
+
+def own_task(task_name: str, task_params: dict | None):
+    """A one-trial task of the viewer's own, or None when the task registry is not there.
+
+    The viewer never touches the training run's task object; it builds this one to know
+    where goals are (four_goals moves them at a given step).
+    """
     try:
         from somarm import tasks
 
-        return tasks.make(task_name, n_trials=1, **(task_params or {}))
-    except (ImportError, AttributeError):  # no task registry yet: fall back on the models' conventions
+        make = tasks.make
+    except (ImportError, AttributeError):  # no task registry: the shows use the models' conventions
         return None
+    return make(task_name, n_trials=1, **(task_params or {}))
 
 
 class LiveView:
@@ -36,23 +54,25 @@ class LiveView:
       task_name: registered task (``reach2``, ``reach20``, ``four_goals``, ``throw``, ...).
       host: address the page listens on (127.0.0.1: this machine only).
       port: web port; None picks a free one.
-      max_rate_hz: at most this many frames a second reach the browser. Rule of thumb: 30
-        looks smooth and costs the training loop well under 5% (see ``somarm bench viewer``
-        in the notes); lower it on a loaded machine.
+      max_rate_hz: at most this many frames a second are pushed. 30 looks smooth; the cost
+        to training is measured by ``python -m somarm.viewer.bench`` (about 1% here).
       trial: which trial of the batch is shown.
-      timeout_s: longest wait for the server before the viewer switches itself off.
       task_params: the run's task parameters, so goals and targets are drawn where training
-        puts them (the viewer builds its own task object; it never touches the training's).
+        puts them.
 
     Attributes:
       url: the page to open.
-      frames_sent: frames that reached the server.
+      frames_sent: frames pushed to the server (it may still drop stale ones).
+      alive: False once the server died (viewing is then off; training carries on).
 
     Example::
 
         with LiveView("reach2") as view:
             print("open", view.url)
             train(config, on_step=view.update)
+
+    Raises:
+      ValueError: unknown task, bad rate or trial; RuntimeError: the server did not start.
     """
 
     def __init__(
@@ -63,32 +83,33 @@ class LiveView:
         port: int | None = None,
         max_rate_hz: float = 30.0,
         trial: int = 0,
-        timeout_s: float = 2.0,
         task_params: dict | None = None,
     ) -> None:
-        from somarm.viewer.client import MeshcatClient
-        from somarm.viewer.server import MeshcatServer, stop_on_signals
-        from somarm.viewer.shows import show_for_task
+        import zmq
 
+        from somarm.viewer.server import MeshcatServer, stop_on_signals
+        from somarm.viewer.shows import MODEL_OF_TASK
+
+        if task_name not in MODEL_OF_TASK:
+            raise ValueError(f"unknown task {task_name!r}; allowed: {', '.join(MODEL_OF_TASK)}")
         rate = check_number("max_rate_hz", max_rate_hz, minimum=0.0, strict_minimum=True)
         self.trial = check_int("trial", trial, minimum=0)
         self._period = 1.0 / rate
-        self._task = _own_task(task_name, task_params)
-        self._stream = show_for_task(task_name, self._task)  # fails fast on an unknown task, before any server
-        self._server = MeshcatServer(host=host, port=port).start()
+        self._server = MeshcatServer(host=host, port=port, live_task=task_name, task_params=task_params).start()
         stop_on_signals(self._server)
         self.url: str = self._server.web_url
-        self._client = MeshcatClient(self._server.zmq_url, timeout_s=timeout_s)
+        self._zmq = zmq
+        self._socket = zmq.Context.instance().socket(zmq.PUSH)
+        self._socket.setsockopt(zmq.CONFLATE, 1)  # at most the newest frame waits in our queue
+        self._socket.setsockopt(zmq.LINGER, 0)  # closing never waits for the server
+        self._socket.connect(self._server.feed_url)
         self.frames_sent = 0
+        self.alive = True
         self._next_time = 0.0
-        self._latest: tuple | None = None
-        self._wake = threading.Event()
-        self._closed = False
-        self._thread = threading.Thread(target=self._run, name="somarm-live-view", daemon=True)
-        self._thread.start()
+        self._next_check = time.perf_counter() + _HEALTH_CHECK_S
 
     def update(self, step: int, observations: np.ndarray, actions: np.ndarray, rewards: np.ndarray) -> None:
-        """Offer the state after a training step; returns at once.
+        """Offer the state after a training step; returns at once, whatever the server does.
 
         Args:
           step: steps done so far.
@@ -100,41 +121,32 @@ class LiveView:
         if now < self._next_time:
             return
         self._next_time = now + self._period
+        if not self.alive:
+            return
+        if now >= self._next_check:
+            self._next_check = now + _HEALTH_CHECK_S
+            if not self._server.alive():
+                self._switch_off("stopped")
+                return
         k = self.trial
-        # Copies of one row: the training loop may reuse its arrays after we return.
-        self._latest = (step, np.array(observations[k], dtype=np.float64),
-                        np.array(actions[k], dtype=np.float64), float(rewards[k]))
-        self._wake.set()
+        frame = pack_frame(step, observations[k], actions[k], rewards[k])
+        try:
+            self._socket.send(frame, self._zmq.NOBLOCK)
+            self.frames_sent += 1
+        except self._zmq.Again:  # the server is not taking frames right now: drop this one
+            pass
 
-    def _run(self) -> None:
-        client = self._client
-        client.send_batch(self._stream.setup())
-        while not self._closed and not client.dead:
-            self._wake.wait(timeout=0.25)
-            self._wake.clear()
-            frame, self._latest = self._latest, None
-            if frame is None:
-                continue
-            step, observation, action, reward = frame
-            if hasattr(self._task, "set_step"):
-                self._task.set_step(step)  # four_goals: the goals move at a given step
-            if client.send_batch(self._stream.frame(observation, action, reward)):
-                self.frames_sent += 1
-
-    @property
-    def alive(self) -> bool:
-        """False once the server stopped answering (viewing is then off)."""
-        return not self._client.dead
+    def _switch_off(self, reason: str) -> None:
+        self.alive = False
+        warnings.warn(f"the meshcat viewer's server {reason}; viewing is off, training carries on",
+                      ViewerUnavailableWarning, stacklevel=3)
 
     def close(self) -> None:
-        """Stop the sender thread and the server. Idempotent."""
-        if self._closed:
-            return
-        self._closed = True
-        self._wake.set()
-        self._thread.join(timeout=self._client.timeout_ms / 1000 + 1.0)
-        self._client.close()
+        """Stop the server and close the socket. Idempotent."""
+        if not self._socket.closed:
+            self._socket.close(linger=0)
         self._server.stop()
+        self.alive = False
 
     def __enter__(self) -> LiveView:
         return self

@@ -34,14 +34,18 @@ class MeshcatServer:
         mean to share the viewer; the zmq command socket is always on 127.0.0.1.
       port: web port; None lets the system pick a free one.
       start_timeout_s: how long to wait for the server to come up.
+      live_task: if given, the server draws this task itself from frames pushed to ``feed_url``
+        (what ``LiveView`` uses); ``task_params`` are the task's parameters.
 
     Attributes (after ``start``):
       web_url: the page to open, e.g. ``http://127.0.0.1:7001/static/``.
       zmq_url: where commands go.
       port: the web port actually bound.
+      feed_url: where ``LiveView`` pushes frames (only with ``live_task``).
     """
 
-    def __init__(self, *, host: str = "127.0.0.1", port: int | None = None, start_timeout_s: float = 30.0):
+    def __init__(self, *, host: str = "127.0.0.1", port: int | None = None, start_timeout_s: float = 30.0,
+                 live_task: str | None = None, task_params: dict | None = None):
         if not isinstance(host, str) or not host:
             raise ValueError(f"host must be a non-empty address string, got {host!r}")
         self.host = host
@@ -49,6 +53,9 @@ class MeshcatServer:
         if self.requested_port > 65535:
             raise ValueError(f"port must be in 0..65535, got {port!r}")
         self.start_timeout_s = check_number("start_timeout_s", start_timeout_s, minimum=0, strict_minimum=True)
+        self.live_task = live_task
+        self.task_params = dict(task_params or {})
+        self.feed_url: str | None = None
         self.web_url: str | None = None
         self.zmq_url: str | None = None
         self.port: int | None = None
@@ -78,6 +85,8 @@ class MeshcatServer:
             "--port", str(self.requested_port), "--ready-file", str(ready_file),
             "--parent-pid", str(os.getpid()),
         ]
+        if self.live_task is not None:
+            command += ["--live-task", self.live_task, "--task-params", json.dumps(self.task_params)]
         # Own session: a Ctrl-C in the terminal reaches us, and we stop the server in order.
         self.process = subprocess.Popen(
             command, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
@@ -93,6 +102,7 @@ class MeshcatServer:
             time.sleep(0.02)
         ready = json.loads(ready_file.read_text())
         self.web_url, self.zmq_url, self.port = ready["web_url"], ready["zmq_url"], int(ready["port"])
+        self.feed_url = ready.get("feed_url")
         return self
 
     def alive(self) -> bool:
