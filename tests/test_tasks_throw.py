@@ -119,3 +119,18 @@ def test_velocities_outside_the_square_are_rejected():
         landing_x(np.nan, 0.5)
     with pytest.raises(ValueError, match="backends"):
         landing_x(0.5, 0.5, backend="exact")
+
+
+def test_params_for_an_observation_drive_the_same_flight_as_the_task():
+    task = tasks.make("throw_mass")
+    observation = task.sample_observations(np.random.default_rng(8), 1)[0]
+    params = task.params_for(observation)
+    assert (params.X, params.W, params.Fr, params.M) == tuple(observation)
+    assert task.target_positions(observation[None]).tolist() == [observation[0]]
+    from somarm.tasks.throw import simulate_trajectory
+
+    _, xy = simulate_trajectory(0.7, 0.6, params)
+    reward = task.evaluate(observation, np.array([0.7, 0.6]))
+    assert -abs(params.X - xy[-1, 0]) == pytest.approx(float(reward), abs=1e-12)
+    _, default = simulate_trajectory(0.7, 0.6)  # no params: Table 3
+    assert default[-1, 0] == pytest.approx(ballistics.landing_x(0.7, 0.6), abs=1e-6)

@@ -24,7 +24,8 @@ from somarm import ballistics
 from somarm.tasks import flight
 from somarm.tasks.base import OneStepTask, check_actions
 
-__all__ = ["RANGES", "VARIED", "TABLE3", "ThrowParams", "Throw", "landing_x", "throw_rewards"]
+__all__ = ["RANGES", "VARIED", "TABLE3", "ThrowParams", "Throw", "landing_x", "simulate_trajectory",
+           "throw_rewards"]
 
 #: Table 6's ranges of the varied parameters.
 RANGES: dict[str, tuple[float, float]] = {"X": (0.0, 9.0), "W": (-3.0, 0.0), "Fr": (0.0, 0.2), "M": (1.0, 2.0)}
@@ -102,6 +103,17 @@ def landing_x(ux, uy, *, params: ThrowParams = TABLE3, Fr=None, W=None, M=None,
     return flight.landing_x(ux, uy, G=params.G, Fr=Fr, W=W, M=M, tolerance=params.tolerance)
 
 
+def simulate_trajectory(ux: float, uy: float, params: ThrowParams | None = None, *,
+                        dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """One throw through MuJoCo for animation: ``(times (T,), xy (T, 2))``, ending at the landing.
+
+    See ``somarm.tasks.launcher.simulate_trajectory``; ``params`` None means Table 3.
+    """
+    from somarm.tasks import launcher  # launcher imports this module: import when called
+
+    return launcher.simulate_trajectory(ux, uy, TABLE3 if params is None else params, dt=dt)
+
+
 def throw_rewards(landing: np.ndarray, X, ux, uy, *, punish_low: bool) -> np.ndarray:
     """``-|X - landing|``, minus 2 for throws below 45 degrees when ``punish_low``."""
     rewards = -np.abs(np.asarray(X) - landing)
@@ -136,6 +148,16 @@ class Throw(OneStepTask):
         for i, key in enumerate(self.varied):
             values[key] = observations[..., i]
         return values
+
+    def params_for(self, observation: np.ndarray) -> ThrowParams:
+        """The full environment of one observation ``(obs_dim,)``: the params with the drawn fields."""
+        observation = np.asarray(observation, dtype=np.float64).reshape(-1)
+        return dataclasses.replace(self.params, **{k: float(observation[i]) for i, k in enumerate(self.varied)})
+
+    def target_positions(self, observations: np.ndarray) -> np.ndarray:
+        """Target X of each observation ``(..., obs_dim) -> (...)``."""
+        observations = np.asarray(observations, dtype=np.float64)
+        return np.broadcast_to(self.conditions(observations)["X"], observations.shape[:-1]).copy()
 
     def reachable(self, observations: np.ndarray) -> np.ndarray:
         """Whether each observation's target lies within reach of the velocity square."""
