@@ -52,24 +52,35 @@ def launcher_flight(model: mujoco.MjModel, ux: float, uy: float, *, wind: float 
 
 
 def throw_adapters(task_name: str, task=None):
-    """``(trajectory(ux, uy) -> (n_points, 2), target_of(observation) -> x)`` for a throwing task."""
+    """``(trajectory_of(observation), target_of(observation))`` for a throwing task.
+
+    ``trajectory_of(observation)`` is a function ``(ux, uy) -> (n_points, 2)`` of (x, height):
+    the flight under that observation's conditions (target, wind, drag, mass), simulated by
+    the tasks' ``simulate_trajectory`` when there is a task, else by stepping the launcher model.
+    ``target_of(observation)`` is the target's x.
+    """
+    if task is not None and hasattr(task, "conditions"):
+        import dataclasses
+
+        from somarm.tasks.launcher import simulate_trajectory
+
+        def conditions(observation: np.ndarray) -> dict[str, float]:
+            values = task.conditions(np.asarray(observation, dtype=np.float64)[None])
+            return {k: float(np.ravel(v)[0]) for k, v in values.items()}
+
+        def trajectory_of(observation: np.ndarray):
+            params = dataclasses.replace(task.params, **conditions(observation))
+            return lambda ux, uy: np.asarray(simulate_trajectory(ux, uy, params)[1])
+
+        return trajectory_of, lambda observation: conditions(observation)["X"]
+
     from somarm.viewer.shows import load_model
 
-    try:
-        from somarm.tasks.throw import simulate_trajectory  # the tasks' own, with their parameters
+    model = load_model("launcher")
 
-        params = getattr(task, "params", None)
-
-        def trajectory(ux: float, uy: float) -> np.ndarray:
-            return np.asarray(simulate_trajectory(ux, uy, params)[1])
-    except ImportError:
-        model = load_model("launcher")
-
-        def trajectory(ux: float, uy: float) -> np.ndarray:
-            return launcher_flight(model, ux, uy)
+    def fallback_of(observation: np.ndarray):
+        return lambda ux, uy: launcher_flight(model, ux, uy)
 
     if task_name == "throw":
-        return trajectory, lambda observation: _THROW_TARGET_X
-    if task is not None and hasattr(task, "target_positions"):
-        return trajectory, lambda observation: float(task.target_positions(np.asarray(observation)[None])[0])
-    return trajectory, lambda observation: float(np.asarray(observation).ravel()[0])
+        return fallback_of, lambda observation: _THROW_TARGET_X
+    return fallback_of, lambda observation: float(np.asarray(observation).ravel()[0])

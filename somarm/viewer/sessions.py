@@ -132,7 +132,7 @@ def record(session: Session, sink: CommandSink) -> None:
         throws = session.fan if session.fan is not None else session.actions[:1]
         show.show.n_balls = len(throws)
         sink.send_batch(show.setup())
-        sink.send_batch(show.show.throw_commands(throws, show.target_of(session.observations[0])))
+        sink.send_batch(show.throws(session.observations[0], throws))
 
 
 def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: bool = False,
@@ -155,7 +155,7 @@ def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: 
             if isinstance(show, shows.ArmShow):
                 sink.send_batch(show.frame(observation, action))
             else:
-                sink.send_batch(show.show.throw_commands(action[None], show.target_of(observation)))
+                sink.send_batch(show.throws(observation, action[None]))
             log(f"goal {np.array2string(observation, precision=3)}  error {error:.4f}")
             time.sleep(interval_s)
         if once:

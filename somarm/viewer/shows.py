@@ -156,11 +156,12 @@ class ThrowShow:
 
     Args:
       model: the launcher's MuJoCo model (target as a mocap body).
-      trajectory: ``(ux, uy) -> xz`` of shape ``(n_points, 2)``: the simulated flight.
+      trajectory: ``(ux, uy) -> (n_points, 2)`` of (x, height): the simulated flight, used
+        unless a call passes its own (the conditions may change with the observation).
       n_balls: how many throws are drawn at once (the action units of a fan, or 1).
     """
 
-    def __init__(self, model: mujoco.MjModel, trajectory: Callable[[float, float], np.ndarray], *,
+    def __init__(self, model: mujoco.MjModel, trajectory: Callable[[float, float], np.ndarray] | None = None, *,
                  n_balls: int = 1, prefix: str = "/meshcat/throw") -> None:
         self.model = model
         self.scene = MujocoScene(model, prefix=f"{prefix}/launcher")
@@ -190,19 +191,27 @@ class ThrowShow:
         span = max(high[0] - low[0], 1.4 * (high[2] - low[2]))
         return overlays.camera_commands(center, np.array([0.0, -1.0, 0.12]), 0.85 * span + 1.0)
 
-    def paths(self, actions: np.ndarray) -> list[np.ndarray]:
+    def paths(self, actions: np.ndarray, trajectory=None) -> list[np.ndarray]:
         """The flights of ``actions`` ``(n_throws, 2)`` as ``(n_points, 3)`` world points."""
+        trajectory = trajectory or self.trajectory
+        if trajectory is None:
+            raise ValueError("ThrowShow needs a trajectory function (ux, uy) -> (n_points, 2)")
         out = []
         for ux, uy in np.asarray(actions, dtype=np.float64):
-            xz = np.asarray(self.trajectory(float(ux), float(uy)), dtype=np.float64)
+            xz = np.asarray(trajectory(float(ux), float(uy)), dtype=np.float64)
             out.append(np.column_stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]]))
         return out
 
-    def throw_commands(self, actions: np.ndarray, target_x: float, *, fps: float = 30.0) -> list[dict]:
-        """Target placed, one trail per throw, and an animation of the balls along their paths."""
+    def throw_commands(self, actions: np.ndarray, target_x: float, *, fps: float = 30.0,
+                       trajectory=None) -> list[dict]:
+        """Target placed, one trail per throw, and an animation of the balls along their paths.
+
+        One animation frame per simulation step: at 30 fps a flight of the Table 3 world
+        (about 25 time units at the tasks' step of 0.25) plays in a few seconds.
+        """
         mocap = np.array([[target_x, 0.0, 0.0]] * self.model.nmocap)
         commands = self.scene.pose_commands(mocap_pos=mocap)
-        paths = self.paths(actions)
+        paths = self.paths(actions, trajectory)
         for k, points in enumerate(paths):
             commands.append(overlays.path_line_command((self.prefix.append(f"trail{k:02d}")), points,
                                                        color=0xFFFFFF))
@@ -218,11 +227,11 @@ class ThrowShow:
         return commands
 
     def frame(self, observation: np.ndarray, action: np.ndarray, reward: float | None = None,
-              *, target_x: float) -> list[dict]:
+              *, target_x: float, trajectory=None) -> list[dict]:
         """One throw during training: its trail and the ball at its landing point (no animation)."""
         mocap = np.array([[target_x, 0.0, 0.0]] * self.model.nmocap)
         commands = self.scene.pose_commands(mocap_pos=mocap)
-        points = self.paths(np.asarray(action)[None, :2])[0]
+        points = self.paths(np.asarray(action)[None, :2], trajectory)[0]
         commands.append(overlays.path_line_command((self.prefix.append("trail00")), points, color=0xFFFFFF))
         commands.append(SetTransform(overlays.translation(points[-1]), self._ball(0)).lower())
         return commands
@@ -231,15 +240,22 @@ class ThrowShow:
 class _ThrowStream:
     """A ``ThrowShow`` fed one throw at a time, with the target where the task puts it."""
 
-    def __init__(self, show: ThrowShow, target_of: Callable[[np.ndarray], float]) -> None:
+    def __init__(self, show: ThrowShow, trajectory_of, target_of: Callable[[np.ndarray], float]) -> None:
         self.show = show
+        self.trajectory_of = trajectory_of
         self.target_of = target_of
 
     def setup(self) -> list[dict]:
         return self.show.setup()
 
     def frame(self, observation: np.ndarray, action: np.ndarray, reward: float | None = None) -> list[dict]:
-        return self.show.frame(observation, action, reward, target_x=self.target_of(observation))
+        return self.show.frame(observation, action, reward, target_x=self.target_of(observation),
+                               trajectory=self.trajectory_of(observation))
+
+    def throws(self, observation: np.ndarray, actions: np.ndarray) -> list[dict]:
+        """All ``actions`` ``(n, 2)`` thrown under ``observation``'s conditions, animated."""
+        return self.show.throw_commands(actions, self.target_of(observation),
+                                        trajectory=self.trajectory_of(observation))
 
 
 def show_for_task(task_name: str, task=None):
@@ -257,5 +273,5 @@ def show_for_task(task_name: str, task=None):
     model = load_model(MODEL_OF_TASK[task_name])
     if MODEL_OF_TASK[task_name] != "launcher":
         return ArmShow(model, goal_of=goal_adapter(task_name, task), prefix=f"/meshcat/{task_name}")
-    trajectory, target_of = throw_adapters(task_name, task)
-    return _ThrowStream(ThrowShow(model, trajectory, prefix=f"/meshcat/{task_name}"), target_of)
+    trajectory_of, target_of = throw_adapters(task_name, task)
+    return _ThrowStream(ThrowShow(model, prefix=f"/meshcat/{task_name}"), trajectory_of, target_of)
