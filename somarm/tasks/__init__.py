@@ -13,7 +13,6 @@ Episode k of ``load(name, seed=s)`` sees the same observation as trial 0 at step
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 __all__ = ["names", "describe", "params_type", "load", "make"]
@@ -131,8 +130,3 @@ def load(name: str, *, seed: int = 0, **params: Any):
     else:
         physics, task = launcher.load_physics(batched.params), launcher.ThrowEnvTask(batched)
     return control.Environment(physics, task, n_sub_steps=1)
-
-
-def params_dict(params) -> dict[str, Any]:
-    """A task's params as a JSON-able dict (for a run's config)."""
-    return dataclasses.asdict(params)

@@ -34,7 +34,8 @@ import numpy as np
 
 from somarm.tasks.assets import model_path
 
-__all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "error_bound", "step_for", "fly", "ProjectileBatch", "landing_x"]
+__all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "error_bound", "step_for", "fly", "max_steps_for",
+           "ProjectileBatch", "landing_x"]
 
 #: This project's bound on the landing error of one throw, used to pick its RK4 step: half the
 #: issue's 1e-6, and about twice what the largest errors measured over Table 6's box reach.
