@@ -119,6 +119,10 @@ def test_velocities_outside_the_square_are_rejected():
         landing_x(np.nan, 0.5)
     with pytest.raises(ValueError, match="backends"):
         landing_x(0.5, 0.5, backend="exact")
+    with pytest.raises(ValueError, match="M must be finite and > 0"):
+        landing_x([0.5, 0.5], 0.5, M=[1.0, 0.0])
+    with pytest.raises(ValueError, match="Fr must be finite and >= 0"):
+        landing_x(0.5, 0.5, Fr=-0.1)
 
 
 def test_params_for_an_observation_drive_the_same_flight_as_the_task():

@@ -76,6 +76,13 @@ def _check_velocities(ux, uy) -> tuple[np.ndarray, np.ndarray]:
     return velocities[..., 0], velocities[..., 1]
 
 
+def _check_condition(name: str, values, ok, allowed: str) -> np.ndarray:
+    array = np.asarray(values, dtype=np.float64)
+    if not (np.isfinite(array) & ok(array)).all():
+        raise ValueError(f"{name} must be finite and {allowed}, got values from {array.min():g} to {array.max():g}")
+    return array
+
+
 def landing_x(ux, uy, *, params: ThrowParams = TABLE3, Fr=None, W=None, M=None,
               backend: str = "mujoco") -> np.ndarray:
     """Landing x of throws, simulated in MuJoCo (default) or from Eq. 7.
@@ -90,12 +97,12 @@ def landing_x(ux, uy, *, params: ThrowParams = TABLE3, Fr=None, W=None, M=None,
       Landing x of the broadcast shape.
 
     Raises:
-      ValueError: velocities outside [0, 1], NaN or inf, or an unknown backend.
+      ValueError: velocities outside [0, 1], NaN or inf, Fr < 0, M <= 0, or an unknown backend.
     """
     ux, uy = _check_velocities(ux, uy)
-    Fr = params.Fr if Fr is None else np.asarray(Fr, dtype=np.float64)
-    W = params.W if W is None else np.asarray(W, dtype=np.float64)
-    M = params.M if M is None else np.asarray(M, dtype=np.float64)
+    Fr = params.Fr if Fr is None else _check_condition("Fr", Fr, lambda v: v >= 0, ">= 0")
+    W = params.W if W is None else _check_condition("W", W, lambda v: np.isfinite(v), "finite")
+    M = params.M if M is None else _check_condition("M", M, lambda v: v > 0, "> 0")
     if backend == "analytic":
         return ballistics.landing_x(ux, uy, G=params.G, Fr=Fr, W=W, M=M)
     if backend != "mujoco":
