@@ -12,6 +12,7 @@ and from then on only reads the clock.
 
 from __future__ import annotations
 
+import json
 import time
 import warnings
 
@@ -44,7 +45,17 @@ def own_task(task_name: str, task_params: dict | None):
         make = tasks.make
     except (ImportError, AttributeError):  # no task registry: the shows use the models' conventions
         return None
-    return make(task_name, n_trials=1, **(task_params or {}))
+    return make(task_name, n_trials=1, **{k: _param_value(v) for k, v in (task_params or {}).items()})
+
+
+def _param_value(text):
+    """A task parameter as the CLI gives it ("4.5", "true"): a JSON number or boolean, else the text."""
+    if not isinstance(text, str):
+        return text
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
 
 
 class LiveView:
