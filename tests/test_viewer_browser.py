@@ -152,6 +152,33 @@ def test_the_page_holds_the_arm_at_mujocos_poses(browser, server, tmp_path):
     client.close()
 
 
+def test_live_view_streams_training_rows_to_the_page(browser):
+    from somarm.viewer.live import LiveView
+
+    model = load_model("arm2")
+    with LiveView("reach2", max_rate_hz=1000.0, trial=1) as view:
+        page = open_page(browser, view.url)
+        page.wait_for_function("() => typeof viewer !== 'undefined' && viewer.scene.getObjectByName('link2')")
+        for step, theta in enumerate([(0.3, 0.4), (1.1, -0.7), (2.2, 0.9)], start=1):
+            observations = np.array([[0.1, 0.1], [0.5, 0.6]])
+            actions = np.array([[0.0, 0.0], theta])
+            view.update(step, observations, actions, np.array([-1.0, -0.2]))
+            expected = mujoco_pose(model, np.array(theta), np.array([[0.5, 0.6, 0.0]]), "link2")
+
+            def shown(expected=expected):
+                drawn = page.evaluate(RELATIVE_POSE, [["meshcat", "reach2"], ["link2"]])
+                return np.allclose(np.array(drawn["link2"]).reshape(4, 4).T, expected, atol=1e-5)
+
+            page.wait_for_timeout(50)
+            for _ in range(100):  # bounded: up to about 10 s per frame
+                if shown():
+                    break
+                page.wait_for_timeout(100)
+            assert shown(), f"frame {step} never reached the page"
+        assert page.foreign_requests == []
+        page.close()
+
+
 def test_a_browser_that_connects_late_gets_the_whole_scene(browser, server):
     show = ArmShow(load_model("arm2"), prefix="/meshcat/late")
     client = MeshcatClient(server.zmq_url, timeout_s=10)
