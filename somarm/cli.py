@@ -57,7 +57,8 @@ def _cmd_train(args) -> int:
         preset=args.preset,
         overrides=training.parse_assignments(args.set, "--set"),
         task_params=training.parse_assignments(args.task_set, "--task-set"),
-        n_trials=args.trials,
+        n_trials=len(args.trial_ids) if args.trial_ids else args.trials,
+        trial_ids=args.trial_ids,
         n_steps=args.steps,
         seed=args.seed,
         backend=args.backend,
@@ -143,6 +144,13 @@ def _parser() -> argparse.ArgumentParser:
     train.add_argument("--set", action="append", metavar="KEY=VALUE", help="change a learner setting")
     train.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
     train.add_argument("--trials", type=int, default=1, help="independent trials (default 1)")
+    train.add_argument(
+        "--trial-ids",
+        type=int,
+        nargs="+",
+        metavar="I",
+        help="run these trials only, e.g. 7 to replay trial 7 of a batch alone",
+    )
     train.add_argument("--steps", type=int, help="training steps (default: the task's)")
     train.add_argument("--seed", type=int, default=0, help="the run's seed (default 0)")
     train.add_argument("--out", help="run folder (default runs/TASK__LEARNER__seedS)")

@@ -20,6 +20,7 @@ from somarm import __version__
 from somarm.io import atomic_save_npz, atomic_write_json
 from somarm.progress import Progress
 from somarm.protocols import BatchedTask, Learner
+from somarm.streams import trial_ids_for
 from somarm.validation import check_int
 
 __all__ = [
@@ -27,7 +28,10 @@ __all__ = [
     "RunConfig",
     "RunResult",
     "build",
+    "build_task",
+    "build_learner",
     "train",
+    "train_group",
     "write_run",
     "load_run",
     "parse_assignments",
@@ -73,6 +77,12 @@ class RunConfig:
     """Where rewards are computed: ``mujoco`` (default) or ``analytic``."""
     block: int = 100
     """Steps per recorded point of the learning curves (mean reward over the block)."""
+    trial_ids: list[int] | None = None
+    """Which trials to run (default ``0 .. n_trials-1``); ``[7]`` replays trial 7 of a batch alone."""
+
+    def trial_ids_array(self) -> np.ndarray:
+        """The trial indices as an array, shape ``(n_trials,)``."""
+        return trial_ids_for(self.n_trials, self.trial_ids)
 
     def resolved(self) -> RunConfig:
         """A copy with the task defaults filled in and every field checked."""
@@ -92,6 +102,9 @@ class RunConfig:
         check_int("steps", resolved.n_steps)
         check_int("seed", resolved.seed, minimum=0)
         check_int("block", resolved.block)
+        if resolved.trial_ids is not None:
+            resolved = dataclasses.replace(resolved, trial_ids=[int(i) for i in resolved.trial_ids])
+        resolved.trial_ids_array()
         return resolved
 
     def to_dict(self) -> dict[str, Any]:
@@ -148,19 +161,31 @@ def _task_value(text: Any) -> Any:
         return text
 
 
-def build(config: RunConfig) -> tuple[BatchedTask, Learner]:
-    """Make the task and the learner of a (resolved) run config."""
-    from somarm import learners, presets, tasks
+def _task_kwargs(config: RunConfig) -> dict[str, Any]:
+    return {k: _task_value(v) for k, v in config.task_params.items()}
 
-    task = tasks.make(
+
+def build_task(config: RunConfig, trial_ids: np.ndarray | None = None) -> BatchedTask:
+    """The batched task of a (resolved) run config, for its trials or the given ``trial_ids``."""
+    from somarm import tasks
+
+    ids = config.trial_ids_array() if trial_ids is None else trial_ids
+    return tasks.make(
         config.task,
-        n_trials=config.n_trials,
+        n_trials=len(ids),
         seed=config.seed,
+        trial_ids=ids,
         backend=config.backend,
-        **{k: _task_value(v) for k, v in config.task_params.items()},
+        **_task_kwargs(config),
     )
+
+
+def build_learner(config: RunConfig, task: BatchedTask) -> Learner:
+    """The learner of a (resolved) run config, reading the task's observation and action bounds."""
+    from somarm import learners, presets
+
     learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
-    learner = learners.make_learner(
+    return learners.make_learner(
         config.learner,
         learner_config,
         observation_low=task.observation_low,
@@ -169,8 +194,14 @@ def build(config: RunConfig) -> tuple[BatchedTask, Learner]:
         action_high=task.action_high,
         n_trials=config.n_trials,
         seed=config.seed,
+        trial_ids=config.trial_ids_array(),
     )
-    return task, learner
+
+
+def build(config: RunConfig) -> tuple[BatchedTask, Learner]:
+    """Make the task and the learner of a (resolved) run config."""
+    task = build_task(config)
+    return task, build_learner(config, task)
 
 
 StepHook = Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]
@@ -206,55 +237,102 @@ def train(
     Returns:
       A ``RunResult``.
     """
-    config = config.resolved()
-    task, learner = build(config)
-    n_blocks = config.n_steps // config.block
-    block_means = np.zeros((n_blocks, config.n_trials))
-    block_sq_means = np.zeros((n_blocks, config.n_trials))
-    accumulated = np.zeros(config.n_trials)
-    accumulated_sq = np.zeros(config.n_trials)
-    snapshots: dict[int, dict[str, np.ndarray]] = {}
-    bar = Progress(config.n_steps, label=label or f"{config.task}/{config.learner}", enabled=progress)
+    return train_group([config], progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)[
+        0
+    ]
+
+
+def train_group(
+    configs: list[RunConfig],
+    *,
+    progress: bool = True,
+    on_step: StepHook | None = None,
+    label: str | None = None,
+    snapshots_at: tuple[int, ...] = (),
+) -> list[RunResult]:
+    """Train several learners in lockstep on one task, with one physics call per step for all.
+
+    The configs may differ only in their learner settings (learner, preset, overrides, trials);
+    they share task, task parameters, backend, seed, steps and block. Each config's trials see the
+    same observations and random numbers as when trained alone, so results equal ``train``'s.
+    Comparisons (Figs. 13, 21-24) run this way: the physics, not the learner, dominates their cost.
+
+    Returns:
+      One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays.
+    """
+    configs = [c.resolved() for c in configs]
+    shared = {
+        (c.task, json.dumps(c.task_params, sort_keys=True), c.backend, c.seed, c.n_steps, c.block)
+        for c in configs
+    }
+    if len(shared) != 1:
+        raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
+    first = configs[0]
+    ids = np.concatenate([c.trial_ids_array() for c in configs])
+    task = build_task(first, ids)
+    learners = [build_learner(c, task) for c in configs]
+    bounds = np.cumsum([0] + [c.n_trials for c in configs])
+    parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    n_blocks = first.n_steps // first.block
+    block_means = np.zeros((n_blocks, len(ids)))
+    block_sq_means = np.zeros((n_blocks, len(ids)))
+    accumulated = np.zeros(len(ids))
+    accumulated_sq = np.zeros(len(ids))
+    actions = np.empty((len(ids), task.action_low.size))
+    snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in configs]
+    bar = Progress(first.n_steps, label=label or f"{first.task}/{first.learner}", enabled=progress)
     last_mean = float("nan")
     start = time.perf_counter()
     step = 0
     interrupted = False
     try:
-        while step < config.n_steps:
+        while step < first.n_steps:
             observations = task.reset()
-            actions = learner.act(observations)
+            for learner, part in zip(learners, parts, strict=True):
+                actions[part] = learner.act(observations[part])
             rewards = task.step(actions)
-            learner.learn(rewards)
+            for learner, part in zip(learners, parts, strict=True):
+                learner.learn(rewards[part])
             accumulated += rewards
             accumulated_sq += rewards * rewards
             step += 1
             if on_step is not None:
                 on_step(step, observations, actions, rewards)
-            if step % config.block == 0:
-                index = step // config.block - 1
-                block_means[index] = accumulated / config.block
-                block_sq_means[index] = accumulated_sq / config.block
+            if step % first.block == 0:
+                index = step // first.block - 1
+                block_means[index] = accumulated / first.block
+                block_sq_means[index] = accumulated_sq / first.block
                 last_mean = float(block_means[index].mean())
                 accumulated[:] = 0.0
                 accumulated_sq[:] = 0.0
                 bar.update(step, last_mean)
             if step in snapshots_at:
-                snapshots[step] = snapshot(learner)
+                for learner, taken in zip(learners, snapshots, strict=True):
+                    taken[step] = snapshot(learner)
     except KeyboardInterrupt:
         interrupted = True
     wall_time = time.perf_counter() - start
     bar.close(step, last_mean)
-    return RunResult(
-        config=config,
-        learner=learner,
-        task=task,
-        block_means=block_means[: step // config.block].copy(),
-        block_sq_means=block_sq_means[: step // config.block].copy(),
-        steps_done=step,
-        wall_time=wall_time,
-        interrupted=interrupted,
-        snapshots=snapshots,
-    )
+    done = step // first.block
+    results = []
+    for config, learner, part, taken in zip(configs, learners, parts, snapshots, strict=True):
+        own_task = task if len(configs) == 1 else build_task(config)
+        if hasattr(own_task, "set_step"):
+            own_task.set_step(step)  # its phase (four_goals) is the one the learner reached
+        results.append(
+            RunResult(
+                config=config,
+                learner=learner,
+                task=own_task,
+                block_means=block_means[:done, part].copy(),
+                block_sq_means=block_sq_means[:done, part].copy(),
+                steps_done=step,
+                wall_time=wall_time,
+                interrupted=interrupted,
+                snapshots=taken,
+            )
+        )
+    return results
 
 
 def final_rewards(block_means: np.ndarray, block: int, window: int) -> np.ndarray:

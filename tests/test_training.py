@@ -29,6 +29,27 @@ def test_trial_alone_equals_trial_in_batch():
     np.testing.assert_array_equal(batch.block_means[:, 0], alone.block_means[:, 0])
 
 
+def test_replay_one_trial_of_a_batch_alone():
+    batch = training.train(_tiny(n_trials=3), progress=False)
+    alone = training.train(_tiny(n_trials=1, trial_ids=[2]), progress=False)
+    np.testing.assert_array_equal(batch.block_means[:, 2], alone.block_means[:, 0])
+    np.testing.assert_array_equal(batch.learner.q[2], alone.learner.q[0])
+
+
+def test_group_in_lockstep_equals_separate_runs():
+    configs = [
+        _tiny(task="throw", n_steps=300),
+        _tiny(task="throw", n_steps=300, n_trials=1, overrides={"neighbourhood_q": "false"}),
+    ]
+    group = training.train_group(configs, progress=False)
+    for config, result in zip(configs, group, strict=True):
+        alone = training.train(config, progress=False)
+        np.testing.assert_array_equal(result.block_means, alone.block_means)
+        np.testing.assert_array_equal(result.learner.action_weights, alone.learner.action_weights)
+    with pytest.raises(ValueError, match="shares task"):
+        training.train_group([_tiny(), _tiny(seed=9)], progress=False)
+
+
 def test_interrupt_leaves_valid_partial_run(tmp_path):
     def stop_at_250(step, observations, actions, rewards):
         if step == 250:
@@ -49,8 +70,15 @@ def test_run_folder_round_trip_and_figures(tmp_path):
     result = training.train(_tiny(), progress=False)
     training.write_run(result, tmp_path)
     names = {p.name for p in tmp_path.iterdir()}
-    assert {"config.json", "curves.npz", "learner.npz", "summary.json", "learning_curve.png",
-            "input_map.png", "action_map.png"} <= names
+    assert {
+        "config.json",
+        "curves.npz",
+        "learner.npz",
+        "summary.json",
+        "learning_curve.png",
+        "input_map.png",
+        "action_map.png",
+    } <= names
     curves = np.load(tmp_path / "curves.npz")
     np.testing.assert_array_equal(curves["block_means"], result.block_means)
     assert int(curves["seed"]) == 3
