@@ -90,6 +90,8 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     if not 0 <= trial < learner.n_trials:
         raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
+    if hasattr(task, "set_step"):
+        task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
     observations = observations[_sweep_order(observations)]
