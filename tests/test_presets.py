@@ -65,7 +65,7 @@ def test_motoric_preset_matches_table2():
     assert isinstance(m, MotoricConfig)
     assert m.input_shape == t2.input_shape and m.alpha == t2.alpha and m.epsilon == t2.epsilon
     assert m.lambda_a == t2.lambda_a and m.n_a == t2.n_a and m.input_init == (0.0, 1.0)
-    assert dataclasses.replace(MotoricConfig(), input_init=(0.0, 1.0)) == m
+    assert dataclasses.replace(MotoricConfig(), input_init=(0.0, 1.0), epsilon_relative=True) == m
     assert presets.config_for("motoric", "table2") == m and presets.config_for("somq", "table2") == t2
 
 
