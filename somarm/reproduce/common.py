@@ -1,0 +1,62 @@
+"""What every experiment shares: the run context, training through ``somarm.training``, helpers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from somarm import training
+from somarm.training import RunConfig, RunResult
+
+__all__ = ["Context", "run", "run_group", "typical_trial", "final_error", "fmt"]
+
+
+@dataclass(frozen=True)
+class Context:
+    """Where and how an experiment runs.
+
+    ``quick`` uses reduced trial counts and run lengths (a smoke test: verdicts are indicative only).
+    """
+
+    out_dir: Path
+    quick: bool = False
+    seed: int = 0
+    progress: bool = True
+
+    def pick(self, full, quick):
+        """The paper-scale value, or the reduced one in quick mode."""
+        return quick if self.quick else full
+
+    def path(self, name: str) -> Path:
+        return self.out_dir / "figures" / name
+
+
+def run(ctx: Context, label: str, config: RunConfig, *, snapshots_at: tuple[int, ...] = ()) -> RunResult:
+    """Train one configuration (every evaluation through the task's default MuJoCo backend)."""
+    return training.train(config, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+
+
+def run_group(
+    ctx: Context, label: str, configs: list[RunConfig], *, snapshots_at: tuple[int, ...] = ()
+) -> list[RunResult]:
+    """Train configurations that share a task in lockstep: one physics call per step for all."""
+    return training.train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+
+
+def final_error(result: RunResult, window: int) -> np.ndarray:
+    """Each trial's mean error (minus reward) over the last ``window`` steps, ``(n_trials,)``."""
+    return -training.final_rewards(result.block_means, result.config.block, window)
+
+
+def typical_trial(errors: np.ndarray) -> int:
+    """The trial with the median final error (the paper shows 'a typical trial')."""
+    return int(np.argsort(errors)[len(errors) // 2])
+
+
+def fmt(x: float, digits: int = 3) -> str:
+    """A number for the report, in fixed notation where sensible."""
+    if not np.isfinite(x):
+        return "never" if np.isnan(x) else str(x)
+    return f"{x:.{digits}g}" if abs(x) < 1e-3 or abs(x) >= 1e4 else f"{x:.{digits}f}"
