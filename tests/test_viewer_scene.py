@@ -224,7 +224,7 @@ def test_importing_somarm_does_not_import_meshcat():
     import subprocess
     import sys
 
-    code = "import sys, somarm; import somarm.cli; print('meshcat' in sys.modules)"
+    code = "import sys, somarm, somarm.cli, somarm.training, somarm.tasks; print('meshcat' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
     assert importlib.util.find_spec("somarm.viewer.scene") is not None

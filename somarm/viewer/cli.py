@@ -1,6 +1,6 @@
 """``somarm view TASK``: watch a learner (trained or not) act on a task in the browser, or export it.
 
-Examples::
+Examples:
 
     somarm view reach2 --run runs/reach2__somq__seed0     # live, until Ctrl-C
     somarm view throw --run runs/throw__somq__seed0        # the fan of Fig. 17, animated
