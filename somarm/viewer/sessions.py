@@ -159,6 +159,7 @@ def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: 
             else:
                 sink.send_batch(show.throws(observation, action[None]))
             log(f"goal {np.array2string(observation, precision=3)}  error {error:.4f}")
-            time.sleep(interval_s)
+            # A throw is watched to its landing before the next one starts.
+            time.sleep(interval_s if isinstance(show, shows.ArmShow) else max(interval_s, show.show.last_duration_s))
         if once:
             return

@@ -169,6 +169,7 @@ class ThrowShow:
         self.trajectory = trajectory
         self.n_balls = n_balls
         self.radius = 0.08
+        self.last_duration_s = 0.0  #: playing time of the last ``throw_commands`` animation
 
     def _ball(self, k: int):
         return self.prefix.append(f"ball{k:02d}")
@@ -216,6 +217,7 @@ class ThrowShow:
             commands.append(overlays.path_line_command((self.prefix.append(f"trail{k:02d}")), points,
                                                        color=0xFFFFFF))
         n_frames = max(len(p) for p in paths)
+        self.last_duration_s = n_frames / fps
         frames = [
             [SetTransform(overlays.translation(p[min(i, len(p) - 1)]), self._ball(k)).lower()
              for k, p in enumerate(paths)]
