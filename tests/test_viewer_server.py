@@ -303,6 +303,8 @@ def test_live_view_rejects_bad_arguments():
         LiveView("reach2", max_rate_hz=0)
     with pytest.raises(ValueError, match="unknown task"):
         LiveView("juggle")
+    with LiveView("reach2", trial=3) as view, pytest.raises(ValueError, match="trial=3 is not in this batch of 2"):
+        view.update(1, np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
 
 
 def _tasks_ready() -> bool:

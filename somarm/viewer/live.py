@@ -127,6 +127,9 @@ class LiveView:
           observations: ``(n_trials, obs_dim)``.
           actions: ``(n_trials, action_dim)``.
           rewards: ``(n_trials,)``.
+
+        Raises:
+          ValueError: the batch has no trial ``trial`` (checked on the first frame).
         """
         now = time.perf_counter()
         if now < self._next_time:
@@ -140,6 +143,8 @@ class LiveView:
                 self._switch_off("stopped")
                 return
         k = self.trial
+        if k >= len(rewards):
+            raise ValueError(f"LiveView trial={k} is not in this batch of {len(rewards)} trial(s)")
         frame = pack_frame(step, observations[k], actions[k], rewards[k])
         try:
             self._socket.send(frame, self._zmq.NOBLOCK)
