@@ -30,7 +30,7 @@ MODEL_OF_TASK: dict[str, str] = {
     "throw_friction": "launcher",
     "throw_mass": "launcher",
 }
-_TIP_COLOR, _ERROR_COLOR = 0xFFD21F, 0xE0301E
+_TIP_COLOR, _ERROR_COLOR, _INPUT_COLOR = 0xFFD21F, 0xE0301E, 0x3050C0
 
 
 def load_model(name: str) -> mujoco.MjModel:
@@ -56,7 +56,8 @@ class ArmShow:
     Args:
       model: the arm's MuJoCo model; the action is its joint angles (``nq`` values), the goal
         a mocap body, the fingertip a site named ``fingertip``.
-      goal_of: maps an observation ``(obs_dim,)`` to the goal's (x, y); default: its first two values.
+      goal_of: maps an observation ``(obs_dim,)`` to the goal's (x, y); default: its first two
+        values. When given (four_goals), the observation itself is drawn too, as a blue dot.
       prefix: meshcat path of the drawing.
     """
 
@@ -70,6 +71,7 @@ class ArmShow:
         self.model = model
         self.scene = MujocoScene(model, prefix=prefix)
         self.prefix = path_of(prefix)
+        self.shows_input = goal_of is not None
         self.goal_of = goal_of or (lambda observation: np.asarray(observation, dtype=np.float64)[:2])
         self.tip_site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "fingertip")
         if self.tip_site < 0:
@@ -81,10 +83,13 @@ class ArmShow:
         """Objects, the static geoms' poses, the markers and the camera."""
         commands = self.scene.setup_commands() + self.scene.pose_commands(everything=True)
         commands += overlays.marker_commands(
-            (self.prefix.append("fingertip")), radius=0.02 * self.size, color=_TIP_COLOR
+            self.prefix.append("fingertip"), radius=0.02 * self.size, color=_TIP_COLOR
         )
-        commands += overlays.segment_commands((self.prefix.append("error")), radius=0.005 * self.size,
+        commands += overlays.segment_commands(self.prefix.append("error"), radius=0.005 * self.size,
                                               color=_ERROR_COLOR)
+        if self.shows_input:
+            commands += overlays.marker_commands(self.prefix.append("input"), radius=0.012 * self.size,
+                                                 color=_INPUT_COLOR)
         center = self.model.stat.center.copy()
         commands += overlays.camera_commands(center, _plane_view(self.model), 0.95 * self.size)
         return commands
@@ -108,6 +113,9 @@ class ArmShow:
         self.last_error = float(np.linalg.norm(tip[:2] - goal[:2]))
         commands.append(SetTransform(overlays.translation(tip), self.prefix.append("fingertip")).lower())
         commands.append(SetTransform(overlays.segment_matrix(tip, goal), self.prefix.append("error")).lower())
+        if self.shows_input:
+            where = np.array([*np.asarray(observation, dtype=np.float64)[:2], 0.0])
+            commands.append(SetTransform(overlays.translation(where), self.prefix.append("input")).lower())
         return commands
 
 
