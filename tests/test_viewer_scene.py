@@ -228,3 +228,29 @@ def test_importing_somarm_does_not_import_meshcat():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
     assert importlib.util.find_spec("somarm.viewer.scene") is not None
+
+
+def test_arm_show_error_is_the_tasks_reward_and_the_tip_is_mujocos_site():
+    tasks = pytest.importorskip("somarm.tasks")
+    if not hasattr(tasks, "make"):
+        pytest.skip("somarm.tasks.make is not in the repository yet")
+    from somarm.viewer.live import own_task
+    from somarm.viewer.shows import show_for_task
+
+    rng = np.random.default_rng(5)
+    for name in ("reach2", "four_goals", "reach20"):
+        task = own_task(name, None)
+        show = show_for_task(name, task)
+        observations = task.sample_observations(rng, 4)
+        actions = rng.uniform(task.action_low, task.action_high, (4, task.action_low.size))
+        rewards = task.evaluate(observations, actions)
+        for observation, action, reward in zip(observations, actions, rewards, strict=True):
+            commands = show.frame(observation, action, reward)
+            assert np.isclose(show.last_error, -reward, atol=1e-9), name
+            tip = next(c for c in commands if c["path"].endswith("/fingertip"))
+            data = mujoco.MjData(show.model)
+            data.qpos[:] = action
+            mujoco.mj_forward(show.model, data)
+            site = mujoco.mj_name2id(show.model, mujoco.mjtObj.mjOBJ_SITE, "fingertip")
+            np.testing.assert_allclose(np.array(tip["matrix"]).reshape(4, 4).T[:3, 3], data.site_xpos[site],
+                                       atol=1e-9)
