@@ -216,3 +216,20 @@ def test_step_before_reset_and_bad_env_action():
     env.reset()
     with pytest.raises(ValueError, match=r"shape \(2,\)"):
         env.step(np.zeros((1, 2)))
+
+
+def test_set_threads_rejects_zero_and_keeps_results():
+    from somarm.tasks import flight
+
+    with pytest.raises(ValueError, match="n must be a whole number >= 1"):
+        tasks.set_threads(0)
+    task = tasks.make("throw")
+    rng = np.random.default_rng(9)
+    actions = rng.random((3000, 2))
+    two = task.evaluate(np.array([4.0]), actions)
+    try:
+        tasks.set_threads(1)
+        assert flight.THREADS == 1
+        np.testing.assert_array_equal(task.evaluate(np.array([4.0]), actions), two)
+    finally:
+        tasks.set_threads(2)

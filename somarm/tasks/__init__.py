@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["names", "describe", "params_type", "load", "make"]
+__all__ = ["names", "describe", "params_type", "load", "make", "set_threads"]
 
 # name -> (one-line description, module of the task, params class name, allowed parameters)
 _TASKS: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
@@ -130,3 +130,15 @@ def load(name: str, *, seed: int = 0, **params: Any):
     else:
         physics, task = launcher.load_physics(batched.params), launcher.ThrowEnvTask(batched)
     return control.Environment(physics, task, n_sub_steps=1)
+
+
+def set_threads(n: int) -> None:
+    """Threads the MuJoCo backend uses for large batches (default 2, this machine's cores).
+
+    Raises:
+      ValueError: ``n`` is not a whole number >= 1.
+    """
+    from somarm.tasks import arms, flight
+    from somarm.validation import check_int
+
+    arms.THREADS = flight.THREADS = check_int("n", n)

@@ -24,6 +24,8 @@ LINK_LENGTHS: dict[int, np.ndarray] = {2: np.array([0.4, 0.4]), 20: np.full(20, 
 _MODELS = {2: "arm2", 20: "arm20"}
 #: Arms per batch model: enough to hide Python's per-call cost (the 20-link arm needs fewer).
 _COPIES = {2: 128, 20: 32}
+#: Threads for batches of more than 512 arms (this machine has 2 cores); see ``tasks.set_threads``.
+THREADS = 2
 
 
 def _check_links(n_links: int) -> str:
@@ -113,13 +115,13 @@ def _batch(n_links: int) -> ArmBatch:
     return cache[n_links]
 
 
-def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int = 2) -> np.ndarray:
+def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int | None = None) -> np.ndarray:
     """Fingertip positions of arms at the given joint angles, computed by MuJoCo.
 
     Args:
       angles: joint angles in radians, shape ``(..., n_links)`` (not checked against bounds).
       n_links: 2 or 20 (the models ``arm2`` and ``arm20``).
-      n_threads: threads for batches of more than 512 arms.
+      n_threads: threads for batches of more than 512 arms (default ``THREADS``).
 
     Returns:
       Array ``(..., 2)`` of fingertip (x, y).
@@ -133,7 +135,7 @@ def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int = 2) -> np.nd
         raise ValueError(f"angles must have shape (..., {n_links}), got {angles.shape}")
     flat = np.ascontiguousarray(angles.reshape(-1, n_links))
     out = np.empty((len(flat), 2))
-    workers = n_threads if len(flat) > 512 else 1
+    workers = (THREADS if n_threads is None else n_threads) if len(flat) > 512 else 1
     if workers <= 1:
         _batch(n_links).fingertips(flat, out)
     else:

@@ -46,6 +46,8 @@ DEFAULT_TOLERANCE = 5e-7
 STEP_LADDER: tuple[float, ...] = (1.0, 0.8, 0.5, 0.4, 0.25, 0.2, 0.125, 0.1, 0.05, 0.025)
 _BOUND_FACTOR = 1.0 / (120.0 * math.e) + 1.0 / 384.0
 _CHUNK = 256
+#: Threads for batches of more than one chunk (this machine has 2 cores); see ``tasks.set_threads``.
+THREADS = 2
 
 
 def error_bound(ux, W, k, step) -> np.ndarray:
@@ -225,14 +227,15 @@ def _run_chunks(chunks: list[np.ndarray], arrays, out: np.ndarray, G: float, siz
 
 
 def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float = DEFAULT_TOLERANCE,
-              n_threads: int = 2, chunk: int = _CHUNK) -> np.ndarray:
+              n_threads: int | None = None, chunk: int = _CHUNK) -> np.ndarray:
     """Landing x of many throws simulated in MuJoCo (unchecked: the tasks validate first).
 
     Args:
       ux, uy: launch velocities, broadcast with the parameters to one shape ``(...)``.
       G: gravity (a scalar for the whole batch). Fr, W, M: drag, wind and mass, per throw or scalar.
       tolerance: landing error bound that picks each throw's step (``step_for``).
-      n_threads: threads for batches of more than one chunk. chunk: throws per model.
+      n_threads: threads for batches of more than one chunk (default ``THREADS``).
+      chunk: throws per model.
 
     Returns:
       Landing x of shape ``(...)``.
@@ -251,7 +254,7 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
     order = np.lexsort((uy_, step))  # one step per chunk; similar flight times share a chunk
     bounds = np.flatnonzero(np.diff(step[order])) + 1
     chunks = [group[i:i + size] for group in np.split(order, bounds) for i in range(0, len(group), size)]
-    workers = max(1, min(n_threads, len(chunks)))
+    workers = max(1, min(THREADS if n_threads is None else n_threads, len(chunks)))
     if workers == 1:
         _run_chunks(chunks, flat, out, G, size)
     else:
