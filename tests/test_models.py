@@ -51,7 +51,8 @@ def test_arms_follow_the_conventions(name, n_links):
     # Straight arm along the x-axis: the tip is the base plus the total length.
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
-    np.testing.assert_allclose(data.site("fingertip").xpos, [1.3, 0.0, 0.0], atol=1e-12)
+    reach = {2: 0.8, 20: 20 * assets.ARM20_LINK_LENGTH}[n_links]  # straight arm along x
+    np.testing.assert_allclose(data.site("fingertip").xpos, [0.5 + reach, 0.0, 0.0], atol=1e-12)
 
 
 def test_launcher_matches_table_3():

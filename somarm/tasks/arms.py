@@ -19,7 +19,7 @@ from somarm.tasks.assets import ARM20_LINK_LENGTH, model_path
 
 __all__ = ["LINK_LENGTHS", "ArmPhysics", "ArmBatch", "fingertips"]
 
-#: This project's link lengths (the paper gives none): 0.4 + 0.4, and 20 links of 0.04.
+#: This project's link lengths (the paper gives none): 0.4 + 0.4, and 20 links of 0.05.
 LINK_LENGTHS: dict[int, np.ndarray] = {2: np.array([0.4, 0.4]), 20: np.full(20, ARM20_LINK_LENGTH)}
 _MODELS = {2: "arm2", 20: "arm20"}
 #: Arms per batch model: enough to hide Python's per-call cost (the 20-link arm needs fewer).

@@ -3,7 +3,7 @@
 The observation is the goal (x, y), drawn uniformly on the goal circle; the action is the
 joint angles to move to; the reward is minus the fingertip-to-goal distance. The circle is
 this project's choice (the paper gives none): centre (0.5, 0.5), radius 0.25, inside the unit
-square and wholly reachable by both arms (reach 0.8 from the base at (0.5, 0)).
+square and wholly reachable by both arms (arm2 reaches 0.8 and arm20 1.0 from the base at (0.5, 0)).
 """
 
 from __future__ import annotations
