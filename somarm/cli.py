@@ -10,7 +10,7 @@ from pathlib import Path
 
 __all__ = ["main"]
 
-_BENCHMARKS = ("learner", "tasks")
+_BENCHMARKS = ("learner", "tasks", "viewer")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -71,7 +71,7 @@ def _cmd_train(args) -> int:
     if args.view:
         from somarm.viewer.live import LiveView
 
-        view = LiveView(config.task, host=args.host, port=args.port)
+        view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
         print(f"viewer: {view.url}", flush=True)
         hook = view.update
     try:
@@ -176,7 +176,7 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
     reproduce.set_defaults(func=_cmd_reproduce)
 
-    bench = sub.add_parser("bench", help="benchmarks: learner, tasks (pass --help after the name)")
+    bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer (pass --help after the name)")
     bench.add_argument("name", choices=_BENCHMARKS)
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
     return parser

@@ -60,7 +60,7 @@ def reach2(ctx: Context) -> Section:
         title="Fig. 7: reach2, mean reward over trials (Table 1)",
     )
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower left")
+    ax.legend(loc="lower center")
     decay = learner.config.alpha.decay
     _overlay_schedule(ax, result.steps, decay, f"f(t) = {decay}")
     section.figures.append(plots.save(fig, ctx.path("fig07_reach2_mean.png")))

@@ -180,7 +180,9 @@ def throw_maps(ctx: Context) -> Section:
     for (n_a, fig_no), result in zip(sizes, grouped, strict=True):
         learner = result.learner
         finals[n_a] = final_error(result, 1000)
-        fig, axes = plt.subplots(n_trials, 3, figsize=(12, 3.3 * n_trials), squeeze=False)
+        fig, axes = plt.subplots(
+            n_trials, 3, figsize=(12, 3.6 * n_trials), squeeze=False, layout="constrained"
+        )
         cvs, errs = [], []
         for i in range(n_trials):
             targets, actions, landed = _greedy_landing(learner, i)
