@@ -31,3 +31,14 @@ def test_interrupted_write_keeps_old_file(tmp_path, monkeypatch):
         atomic_write_text(target, "new")
     assert target.read_text() == "old"
     assert list(tmp_path.iterdir()) == [target]
+
+
+def test_written_files_get_the_usual_mode(tmp_path):
+    import os
+
+    old = os.umask(0o022)
+    try:
+        atomic_write_text(tmp_path / "e.txt", "x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "e.txt").stat().st_mode & 0o777 == 0o644
