@@ -108,7 +108,7 @@ def _cmd_evaluate(args) -> int:
         n_trials=learner.n_trials,
         seed=config.seed,
         backend=config.backend,
-        **{k: training._task_value(v) for k, v in config.task_params.items()},
+        **training.task_kwargs(config.task_params),
     )
     if hasattr(task, "set_step"):
         task.set_step(learner.t)  # tasks whose goals move (four_goals) evaluate in the learned phase

@@ -35,6 +35,7 @@ __all__ = [
     "write_run",
     "load_run",
     "parse_assignments",
+    "task_kwargs",
 ]
 
 #: Per task: the paper's parameter table and this project's default run length (the paper gives
@@ -151,18 +152,19 @@ def parse_assignments(items: list[str] | None, what: str) -> dict[str, str]:
     return out
 
 
-def _task_value(text: Any) -> Any:
-    """A task parameter from the CLI: a JSON number or boolean, else the string itself."""
-    if not isinstance(text, str):
-        return text
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
+def task_kwargs(task_params: dict[str, Any]) -> dict[str, Any]:
+    """Task parameters as the CLI gives them (``"4.5"``, ``"true"``) turned into values.
 
-
-def _task_kwargs(config: RunConfig) -> dict[str, Any]:
-    return {k: _task_value(v) for k, v in config.task_params.items()}
+    A string that parses as JSON (a number, a boolean, a list) becomes that value; any other
+    string stays as it is. Values that are not strings pass through.
+    """
+    out = {}
+    for key, value in task_params.items():
+        try:
+            out[key] = json.loads(value) if isinstance(value, str) else value
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
 
 
 def build_task(config: RunConfig, trial_ids: np.ndarray | None = None) -> BatchedTask:
@@ -176,7 +178,7 @@ def build_task(config: RunConfig, trial_ids: np.ndarray | None = None) -> Batche
         seed=config.seed,
         trial_ids=ids,
         backend=config.backend,
-        **_task_kwargs(config),
+        **task_kwargs(config.task_params),
     )
 
 

@@ -12,7 +12,6 @@ and from then on only reads the clock.
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 
@@ -45,17 +44,9 @@ def own_task(task_name: str, task_params: dict | None):
         make = tasks.make
     except (ImportError, AttributeError):  # no task registry: the shows use the models' conventions
         return None
-    return make(task_name, n_trials=1, **{k: _param_value(v) for k, v in (task_params or {}).items()})
+    from somarm.training import task_kwargs
 
-
-def _param_value(text):
-    """A task parameter as the CLI gives it ("4.5", "true"): a JSON number or boolean, else the text."""
-    if not isinstance(text, str):
-        return text
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
+    return make(task_name, n_trials=1, **task_kwargs(task_params or {}))
 
 
 class LiveView:

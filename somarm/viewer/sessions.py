@@ -82,7 +82,7 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         config, learner = training.load_run(run)
         if config.task != task_name:
             raise ValueError(f"--run {run} trained task {config.task!r}, not {task_name!r}")
-        task_params = {k: training._task_value(v) for k, v in config.task_params.items()}
+        task_params = training.task_kwargs(config.task_params)
     else:
         config = training.RunConfig(task=task_name, seed=seed).resolved()
         _, learner = training.build(config)
