@@ -59,4 +59,6 @@ def fmt(x: float, digits: int = 3) -> str:
     """A number for the report, in fixed notation where sensible."""
     if not np.isfinite(x):
         return "never" if np.isnan(x) else str(x)
+    if float(x).is_integer() and abs(x) < 1e7:
+        return str(int(x))
     return f"{x:.{digits}g}" if abs(x) < 1e-3 or abs(x) >= 1e4 else f"{x:.{digits}f}"
