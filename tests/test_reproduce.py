@@ -46,8 +46,8 @@ def test_quick_reproduce_end_to_end_smoke(tmp_path):
     _check_report(tmp_path, names)
 
 
-@pytest.mark.slow
 def test_quick_reproduce_every_experiment(tmp_path):
+    # The whole quick path (about a minute): every experiment runs, reports numbers and draws its figures.
     assert runner.reproduce(tmp_path, quick=True, progress=False) == 0
     _check_report(tmp_path, list(runner.EXPERIMENTS))
 

@@ -72,8 +72,8 @@ def throw(ctx: Context) -> Section:
         for t, snap in sorted(result.snapshots.items())
     }
     section.notes.append(
-        "Why the units bunch: the median u_y span of the action map after "
-        + ", ".join(f"{t} throws {fmt(v, 2)}" for t, v in spans.items())
+        "Why the units bunch: the median u_y span of the action map at "
+        + ", ".join(f"throw {t}: {fmt(v, 2)}" for t, v in spans.items())
         + ". With lambda_A = 1 and N_A = 15 at the start, each improving perturbation pulls most of the map "
         "onto one point; afterwards the SOM pull between neighbours (N_A >= 2) contracts the chain, and along a "
         "curve of equal reward nothing in the update rule pushes units apart, so they find the curve but not "
