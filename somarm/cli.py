@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 
 __all__ = ["main"]
@@ -30,6 +32,16 @@ def _check_writable(folder: Path) -> Path:
     except OSError as exc:
         raise ValueError(f"--out {folder} is not writable: {exc.strerror or exc}") from None
     return folder
+
+
+def _stop_on_sigterm() -> None:
+    """Treat SIGTERM like Ctrl-C, so a stopped run still writes its valid partial results."""
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, handler)
 
 
 def _cmd_tasks(args) -> int:
@@ -66,6 +78,7 @@ def _cmd_train(args) -> int:
     ).resolved()
     out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
     training.build(config)  # fail fast on a bad preset, --set or --task-set before any output
+    _stop_on_sigterm()
     hook = None
     view = None
     if args.view:
@@ -124,6 +137,7 @@ def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
 
     out = _check_writable(Path(args.out))
+    _stop_on_sigterm()
     return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
 
 

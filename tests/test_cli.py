@@ -1,4 +1,9 @@
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -60,3 +65,30 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
 def test_bad_input_is_one_clear_line(args, expected, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     _one_line_error(capsys, main(args), expected)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_mid_run_leaves_a_valid_partial_run(tmp_path, sig):
+    out = tmp_path / "run"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "50000000", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "disable"},
+    )
+    try:
+        deadline = time.monotonic() + 60
+        line = ""
+        while "mean reward" not in line and time.monotonic() < deadline:  # training has started
+            line = proc.stderr.read(200)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert "partial results written" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True and 0 < summary["steps"] < 50_000_000
+    assert main(["evaluate", str(out)]) == 0
+    assert not list(out.glob("*.tmp"))
