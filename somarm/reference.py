@@ -26,6 +26,19 @@ from .validation import check_array, check_bounds
 __all__ = ["ReferenceSOMQ"]
 
 
+
+def _winner(weights: np.ndarray, x: np.ndarray) -> int:
+    """The unit nearest to ``x`` by squared Euclidean distance (the first on a tie), as a loop."""
+    best, winner = math.inf, 0
+    for m in range(weights.shape[0]):
+        total = 0.0
+        for i in range(x.size):
+            diff = x[i] - weights[m, i]
+            total += diff * diff
+        if total < best:
+            best, winner = total, m
+    return winner
+
 class ReferenceSOMQ:
     """One SOM-Q agent, step by step. Same constructor keywords as ``SOMQ`` but a single trial.
 
@@ -65,14 +78,7 @@ class ReferenceSOMQ:
         x = check_array("observation", observation, (self.observation_low.size,))
         row = self.streams.next()[0]
         # Step 1: the input unit nearest to the observation (squared Euclidean distance).
-        best, j = math.inf, 0
-        for m in range(self.input_weights.shape[0]):
-            total = 0.0
-            for i in range(x.size):
-                diff = x[i] - self.input_weights[m, i]
-                total += diff * diff
-            if total < best:
-                best, j = total, m
+        j = _winner(self.input_weights, x)
         # Step 2: a random action unit with probability p, else the best Q for s_j (ties at random).
         n_a = self.q.shape[1]
         if row[0] < cfg.p.value(t):
@@ -109,14 +115,7 @@ class ReferenceSOMQ:
         target = float(reward)
         if cfg.gamma > 0.0 and not terminal:
             x_next = check_array("next_observation", next_observation, (x.size,))
-            best, j_next = math.inf, 0
-            for m in range(self.input_weights.shape[0]):
-                total = 0.0
-                for i in range(x_next.size):
-                    diff = x_next[i] - self.input_weights[m, i]
-                    total += diff * diff
-                if total < best:
-                    best, j_next = total, m
+            j_next = _winner(self.input_weights, x_next)
             target = target + cfg.gamma * self.q[j_next].max()
         # Step 7: move the action map towards the perturbed action only if it looks better.
         if target > self.q[j, k]:
