@@ -122,15 +122,17 @@ def draw_action_map(
     *,
     labels: tuple[str, str] = ("action 1 (normalised)", "action 2 (normalised)"),
     normalise: bool = True,
+    join: bool = True,
 ) -> None:
     """Action units in (normalised) action space, shaded by their index in the map.
 
-    2-D actions are drawn as points joined in map order; higher-dimensional ones as a heat map of
-    unit index against action dimension.
+    2-D actions are drawn as points joined in map order (``join``); higher-dimensional ones as a
+    heat map of unit index against action dimension.
     """
     values = (weights - low) / (high - low) if normalise else weights
     if values.shape[1] == 2:
-        ax.plot(values[:, 0], values[:, 1], color="0.6", lw=0.7, zorder=1)
+        if join:
+            ax.plot(values[:, 0], values[:, 1], color="0.6", lw=0.7, zorder=1)
         ax.scatter(
             values[:, 0],
             values[:, 1],
@@ -157,6 +159,21 @@ def draw_action_map(
         ax.figure.colorbar(image, ax=ax, label="normalised value" if normalise else "value")
         ax.set_xlabel("action dimension")
         ax.set_ylabel("action unit index")
+
+
+#: Axis names of each task's observations and (normalised) actions, for the run figures.
+_ARM_ACTIONS = ("theta1 (normalised from [-pi, pi])", "theta2 (normalised)")
+_THROW_ACTIONS = ("u_x (horizontal speed)", "u_y (vertical speed)")
+AXIS_LABELS: dict[str, tuple[tuple[str, ...], tuple[str, str]]] = {
+    "reach2": (("goal x", "goal y"), _ARM_ACTIONS),
+    "reach20": (("goal x", "goal y"), _ARM_ACTIONS),
+    "four_goals": (("input x", "input y"), _ARM_ACTIONS),
+    "throw": (("target X",), _THROW_ACTIONS),
+    "throw_distance": (("target X",), _THROW_ACTIONS),
+    "throw_wind": (("target X", "wind W"), _THROW_ACTIONS),
+    "throw_friction": (("target X", "wind W"), _THROW_ACTIONS),
+    "throw_mass": (("target X", "wind W"), _THROW_ACTIONS),
+}
 
 
 def run_figures(result, out: Path) -> list[Path]:
@@ -187,12 +204,26 @@ def run_figures(result, out: Path) -> list[Path]:
         greedy = np.arange(len(input_weights))
         n_actions = len(input_weights)
     fig, ax = plt.subplots(figsize=(5, 5))
-    draw_input_map(ax, input_weights, greedy, n_actions, grid_shape)
+    observation_labels, action_labels = AXIS_LABELS.get(
+        config.task, (("observation 1", "observation 2"), ("action 1 (normalised)", "action 2 (normalised)"))
+    )
+    draw_input_map(ax, input_weights, greedy, n_actions, grid_shape, labels=(*observation_labels, "")[:2])
     ax.set_title("input map (trial 0), shaded by greedy action unit")
     paths.append(save(fig, out / "input_map.png"))
 
     fig, ax = plt.subplots(figsize=(5, 5))
-    draw_action_map(ax, np.asarray(learner.action_weights)[0], task.action_low, task.action_high)
-    ax.set_title("action map (trial 0), shaded by unit index")
+    draw_action_map(
+        ax,
+        np.asarray(learner.action_weights)[0],
+        task.action_low,
+        task.action_high,
+        labels=action_labels,
+        join=hasattr(learner, "q"),  # a Motoric Map's actions follow the input grid, not a chain
+    )
+    ax.set_title(
+        "action map (trial 0), shaded by unit index"
+        if hasattr(learner, "q")
+        else "each input unit's action (trial 0), shaded by input unit"
+    )
     paths.append(save(fig, out / "action_map.png"))
     return paths
