@@ -44,6 +44,17 @@ def _stop_on_sigterm() -> None:
         signal.signal(signal.SIGTERM, handler)
 
 
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[-1]
+
+
+def _n_trials(trials: int | None, trial_ids: list[int] | None) -> int:
+    """--trials, or the number of --trial-ids; both given must agree."""
+    if trial_ids and trials is not None and trials != len(trial_ids):
+        raise ValueError(f"--trials {trials} disagrees with {len(trial_ids)} --trial-ids; give one of them")
+    return len(trial_ids) if trial_ids else (1 if trials is None else trials)
+
+
 def _cmd_tasks(args) -> int:
     from somarm import tasks
 
@@ -69,22 +80,27 @@ def _cmd_train(args) -> int:
         preset=args.preset,
         overrides=training.parse_assignments(args.set, "--set"),
         task_params=training.parse_assignments(args.task_set, "--task-set"),
-        n_trials=len(args.trial_ids) if args.trial_ids else args.trials,
+        n_trials=_n_trials(args.trials, args.trial_ids),
         trial_ids=args.trial_ids,
         n_steps=args.steps,
         seed=args.seed,
         backend=args.backend,
         block=args.block,
     ).resolved()
-    out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
     training.build(config)  # fail fast on a bad preset, --set or --task-set before any output
+    out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
     _stop_on_sigterm()
     hook = None
     view = None
     if args.view:
         from somarm.viewer.live import LiveView
 
-        view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
+        try:
+            view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
+        except (OSError, RuntimeError) as exc:
+            raise ValueError(
+                f"the viewer could not start on --host {args.host}: {_first_line(exc)}"
+            ) from None
         print(f"viewer: {view.url}", flush=True)
         hook = view.update
     try:
@@ -94,12 +110,16 @@ def _cmd_train(args) -> int:
             view.close()
     extra = {}
     if result.steps_done > 0:
-        greedy = evaluation.evaluate_greedy(result.learner, result.task, seed=config.seed)
-        extra = {
-            "greedy_mean_reward": float(greedy.mean()),
-            "greedy_sd_reward": float(greedy.std()),
-            "greedy_observations": 1000,
-        }
+        try:  # the run is written whatever happens here
+            greedy = evaluation.evaluate_greedy(result.learner, result.task, seed=config.seed)
+            extra = {
+                "greedy_mean_reward": float(greedy.mean()),
+                "greedy_sd_reward": float(greedy.std()),
+                "greedy_observations": 1000,
+            }
+        except ValueError as exc:
+            extra = {"greedy_error": str(exc)}
+            print(f"somarm: warning: greedy evaluation failed: {exc}", file=sys.stderr)
     training.write_run(result, out, figures=not args.no_figures, extra_summary=extra)
     if result.interrupted:
         print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
@@ -136,6 +156,7 @@ def _cmd_evaluate(args) -> int:
 def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
 
+    runner.check_names(args.only)
     out = _check_writable(Path(args.out))
     _stop_on_sigterm()
     return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
@@ -157,7 +178,7 @@ def _parser() -> argparse.ArgumentParser:
     train.add_argument("--preset", help="parameter table (see `somarm presets`); default: the task's")
     train.add_argument("--set", action="append", metavar="KEY=VALUE", help="change a learner setting")
     train.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
-    train.add_argument("--trials", type=int, default=1, help="independent trials (default 1)")
+    train.add_argument("--trials", type=int, help="independent trials (default 1)")
     train.add_argument(
         "--trial-ids",
         type=int,

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import zipfile
 from typing import Any
 
 import numpy as np
@@ -90,6 +91,10 @@ def initial_generator(seed: int, trial_id: int) -> np.random.Generator:
 
 
 # -- configs ------------------------------------------------------------------------------------
+#: The schedules that are learning rates (a step of ``rate x (target - value)``).
+_RATES = ("alpha", "lambda_s", "lambda_a")
+
+
 def validate_common(config: Any, *, probabilities: tuple[str, ...] = ()) -> None:
     """Check and normalise a learner config in place (frozen dataclass ``__post_init__``)."""
     set_field = object.__setattr__
@@ -102,6 +107,9 @@ def validate_common(config: Any, *, probabilities: tuple[str, ...] = ()) -> None
             set_field(config, name, Schedule(check_number(name, value, minimum=0.0)))
         elif name in probabilities and max(value.scale, value.floor) > 1.0:
             raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
+        elif name in _RATES and max(value.scale, value.floor) > 1.0:
+            # A rate above 1 overshoots its target: a SOM unit lands beyond the vector it moves to.
+            raise ValueError(f"{name} is a learning rate and must lie in [0, 1], got {value!r}")
     set_field(config, "gamma", check_number("gamma", config.gamma, minimum=0.0, maximum=1.0))
     for name in ("neighbourhood_q", "neighbourhood_values", "epsilon_relative"):
         if hasattr(config, name) and not isinstance(getattr(config, name), bool):
@@ -195,8 +203,9 @@ def _read_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.nd
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in data.files}
         meta = json.loads(str(arrays.pop("meta")))
-    except (OSError, KeyError, ValueError) as exc:
-        raise ValueError(f"cannot read a learner from {path}: {exc}") from None
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile, EOFError) as exc:
+        reason = "not a learner file (or a damaged one)" if "pickle" in str(exc) else str(exc)
+        raise ValueError(f"cannot read a learner from {path}: {reason}") from None
     if meta.get("kind") not in _KINDS:
         raise ValueError(f"{path} holds no learner kind; allowed: {', '.join(_KINDS)}")
     return meta, arrays

@@ -41,8 +41,9 @@ def trial_ids_for(n_trials: int, trial_ids: Sequence[int] | None = None) -> np.n
     ids = np.asarray(trial_ids)
     if ids.shape != (n_trials,) or not np.issubdtype(ids.dtype, np.integer) or (ids < 0).any():
         raise ValueError(
-            f"trial_ids must be {n_trials} whole numbers >= 0 (one per trial), got {list(ids)!r}"
+            f"trial_ids must be {n_trials} whole numbers >= 0 (one per trial), got {ids.tolist()!r}"
         )
+
     return ids.astype(np.int64)
 
 
@@ -83,9 +84,7 @@ class UniformStreams:
       block: rows drawn at a time; a speed knob only, it never changes the numbers.
     """
 
-    def __init__(
-        self, seed: int, trial_ids: np.ndarray, purpose: str, width: int, *, block: int = 512
-    ):
+    def __init__(self, seed: int, trial_ids: np.ndarray, purpose: str, width: int, *, block: int = 512):
         if width < 1 or block < 1:
             raise ValueError(f"width and block must be >= 1, got width={width}, block={block}")
         self.width = int(width)
@@ -140,6 +139,4 @@ class UniformStreams:
         self.width, self.block, self._pos = int(state["width"]), int(state["block"]), int(state["pos"])
         for generator, bit_state in zip(self._generators, state["bit_generators"], strict=True):
             generator.bit_generator.state = bit_state
-        self._buffer = np.array(state["buffer"], dtype=float).reshape(
-            self.n_trials, self.block, self.width
-        )
+        self._buffer = np.array(state["buffer"], dtype=float).reshape(self.n_trials, self.block, self.width)

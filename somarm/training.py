@@ -6,8 +6,11 @@ task.step (physics) -> rewards -> learner.learn``. The runner holds both ends an
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
+import signal
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -103,9 +106,11 @@ class RunConfig:
         check_int("steps", resolved.n_steps)
         check_int("seed", resolved.seed, minimum=0)
         check_int("block", resolved.block)
+        ids = resolved.trial_ids_array().tolist()
         if resolved.trial_ids is not None:
-            resolved = dataclasses.replace(resolved, trial_ids=[int(i) for i in resolved.trial_ids])
-        resolved.trial_ids_array()
+            if len(set(ids)) != len(ids):
+                raise ValueError(f"trial ids must differ from each other (a trial runs once), got {ids}")
+            resolved = dataclasses.replace(resolved, trial_ids=ids)
         return resolved
 
     def to_dict(self) -> dict[str, Any]:
@@ -113,10 +118,18 @@ class RunConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RunConfig:
+        """Inverse of ``to_dict``; ValueError naming a missing, unknown or mistyped setting."""
         names = {f.name for f in dataclasses.fields(cls)}
+        if not isinstance(data, dict):
+            raise ValueError(f"run settings must be a JSON object with keys {', '.join(sorted(names))}")
         unknown = set(data) - names
         if unknown:
             raise ValueError(f"unknown run settings {sorted(unknown)}; allowed: {', '.join(sorted(names))}")
+        if "task" not in data:
+            raise ValueError("run settings lack 'task'")
+        for key in ("overrides", "task_params"):
+            if not isinstance(data.get(key, {}), dict):
+                raise ValueError(f"run setting {key!r} must be a JSON object of KEY: VALUE")
         return cls(**data)
 
 
@@ -206,6 +219,32 @@ def build(config: RunConfig) -> tuple[BatchedTask, Learner]:
     return task, build_learner(config, task)
 
 
+@contextlib.contextmanager
+def _stop_between_steps():
+    """Inside, Ctrl-C (SIGINT) and SIGTERM only raise a flag that the loop reads after each step.
+
+    A run therefore stops between steps, never between a learner's ``act`` and ``learn``. Signals
+    that were being ignored stay ignored; outside the main thread nothing changes.
+    """
+    stop = {"requested": False}
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def request(signum, frame):
+        stop["requested"] = True
+
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, handler in previous.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(sig, request)
+    try:
+        yield stop
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 StepHook = Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]
 
 
@@ -225,7 +264,7 @@ def train(
 ) -> RunResult:
     """Train ``config.n_trials`` trials for ``config.n_steps`` steps.
 
-    Ctrl-C stops at the end of the current step and returns what was learned so far
+    Ctrl-C or SIGTERM stops at the end of the current step and returns what was learned so far
     (``interrupted=True``): the caller can still write a valid partial run.
 
     Args:
@@ -287,32 +326,36 @@ def train_group(
     start = time.perf_counter()
     step = 0
     interrupted = False
-    try:
-        while step < first.n_steps:
-            observations = task.reset()
-            for learner, part in zip(learners, parts, strict=True):
-                actions[part] = learner.act(observations[part])
-            rewards = task.step(actions)
-            for learner, part in zip(learners, parts, strict=True):
-                learner.learn(rewards[part])
-            accumulated += rewards
-            accumulated_sq += rewards * rewards
-            step += 1
-            if on_step is not None:
-                on_step(step, observations, actions, rewards)
-            if step % first.block == 0:
-                index = step // first.block - 1
-                block_means[index] = accumulated / first.block
-                block_sq_means[index] = accumulated_sq / first.block
-                last_mean = float(block_means[index].mean())
-                accumulated[:] = 0.0
-                accumulated_sq[:] = 0.0
-                bar.update(step, last_mean)
-            if step in snapshots_at:
-                for learner, taken in zip(learners, snapshots, strict=True):
-                    taken[step] = snapshot(learner)
-    except KeyboardInterrupt:
-        interrupted = True
+    with _stop_between_steps() as stop:
+        try:
+            while step < first.n_steps:
+                observations = task.reset()
+                for learner, part in zip(learners, parts, strict=True):
+                    actions[part] = learner.act(observations[part])
+                rewards = task.step(actions)
+                for learner, part in zip(learners, parts, strict=True):
+                    learner.learn(rewards[part])
+                accumulated += rewards
+                accumulated_sq += rewards * rewards
+                step += 1
+                if on_step is not None:
+                    on_step(step, observations, actions, rewards)
+                if step % first.block == 0:
+                    index = step // first.block - 1
+                    block_means[index] = accumulated / first.block
+                    block_sq_means[index] = accumulated_sq / first.block
+                    last_mean = float(block_means[index].mean())
+                    accumulated[:] = 0.0
+                    accumulated_sq[:] = 0.0
+                    bar.update(step, last_mean)
+                if step in snapshots_at:
+                    for learner, taken in zip(learners, snapshots, strict=True):
+                        taken[step] = snapshot(learner)
+                if stop["requested"]:
+                    interrupted = True
+                    break
+        except KeyboardInterrupt:  # raised by an on_step hook, or outside the main thread
+            interrupted = True
     wall_time = time.perf_counter() - start
     bar.close(step, last_mean)
     done = step // first.block
@@ -337,12 +380,25 @@ def train_group(
     return results
 
 
+def final_blocks(n_blocks: int, block: int, window: int) -> int:
+    """How many of the last blocks make up a final window of about ``window`` steps (0 if none)."""
+    return min(n_blocks, max(1, round(window / block)))
+
+
 def final_rewards(block_means: np.ndarray, block: int, window: int) -> np.ndarray:
-    """Each trial's mean reward over the last ``window`` steps, shape ``(n_trials,)``."""
-    n = max(1, min(len(block_means), window // block))
-    if len(block_means) == 0:
+    """Each trial's mean reward over the last ``window`` steps (whole blocks), shape ``(n_trials,)``.
+
+    NaN when no block is complete.
+    """
+    n = final_blocks(len(block_means), block, window)
+    if n == 0:
         return np.full(block_means.shape[1], np.nan)
     return block_means[-n:].mean(axis=0)
+
+
+def _number_or_none(x: float) -> float | None:
+    """JSON has no NaN: a mean over nothing is written as null."""
+    return float(x) if np.isfinite(x) else None
 
 
 def write_run(
@@ -364,6 +420,7 @@ def write_run(
     config = result.config
     window = min(1000, max(config.block, config.n_steps // 10))
     final = final_rewards(result.block_means, config.block, window)
+    window = final_blocks(len(result.block_means), config.block, window) * config.block
     summary = {
         "task": config.task,
         "learner": config.learner,
@@ -375,8 +432,8 @@ def write_run(
         "interrupted": result.interrupted,
         "wall_time_s": round(result.wall_time, 3),
         "final_window_steps": window,
-        "final_mean_reward": float(np.mean(final)),
-        "final_sd_reward": float(np.std(final)),
+        "final_mean_reward": _number_or_none(np.mean(final)),
+        "final_sd_reward": _number_or_none(np.std(final)),
         "somarm_version": __version__,
     }
     summary.update(extra_summary or {})
@@ -406,6 +463,14 @@ def load_run(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     for name in ("config.json", "learner.npz"):
         if not (out / name).is_file():
             raise ValueError(f"{out} is not a run folder: {name} is missing")
-    data = json.loads((out / "config.json").read_text())
-    data.pop("somarm_version", None)
-    return RunConfig.from_dict(data), learners.load_learner(out / "learner.npz")
+    try:
+        data = json.loads((out / "config.json").read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{out / 'config.json'} is not readable JSON: {exc}") from None
+    if isinstance(data, dict):
+        data.pop("somarm_version", None)
+    try:
+        config = RunConfig.from_dict(data)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{out / 'config.json'}: {exc}") from None
+    return config, learners.load_learner(out / "learner.npz")

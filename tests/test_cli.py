@@ -60,6 +60,10 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
         (["train", "reach2", "--out", "/proc/somarm-cannot-write"], "not writable"),
         (["evaluate", "/nonexistent-run"], "not a run folder"),
         (["reproduce", "--only", "fig99"], "unknown experiment"),
+        (["train", "reach2", "--set", "lambda_a=3"], "learning rate"),
+        (["train", "reach2", "--trial-ids", "3", "3"], "differ"),
+        (["train", "reach2", "--trials", "5", "--trial-ids", "7"], "disagrees"),
+        (["train", "reach2", "--trial-ids", "-1"], "trial_ids"),
     ],
 )
 def test_bad_input_is_one_clear_line(args, expected, capsys, tmp_path, monkeypatch):
@@ -92,3 +96,39 @@ def test_a_signal_mid_run_leaves_a_valid_partial_run(tmp_path, sig):
     assert summary["interrupted"] is True and 0 < summary["steps"] < 50_000_000
     assert main(["evaluate", str(out)]) == 0
     assert not list(out.glob("*.tmp"))
+
+
+@pytest.mark.parametrize(
+    "config_text, learner_bytes, expected",
+    [
+        ("[1, 2]", None, "JSON object"),
+        ('{"task": "reach2", "task_params": []}', None, "task_params"),
+        ('{"task": "reach2"', None, "not readable JSON"),
+        ('{"task": "throw"}', b"PK\x03\x04 truncated", "cannot read a learner"),
+    ],
+)
+def test_damaged_run_folder_is_one_clear_line(tmp_path, capsys, config_text, learner_bytes, expected):
+    assert (
+        main(["train", "throw", "--steps", "200", "--no-progress", "--no-figures", "--out", str(tmp_path)])
+        == 0
+    )
+    (tmp_path / "config.json").write_text(config_text)
+    if learner_bytes is not None:
+        (tmp_path / "learner.npz").write_bytes(learner_bytes)
+    capsys.readouterr()
+    _one_line_error(capsys, main(["evaluate", str(tmp_path)]), expected)
+
+
+def test_bad_input_leaves_no_output_folder(tmp_path, capsys):
+    assert main(["train", "reach2", "--set", "bogus=1", "--out", str(tmp_path / "a")]) == 2
+    assert main(["reproduce", "--only", "fig99", "--out", str(tmp_path / "b")]) == 2
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_a_run_shorter_than_one_block_writes_valid_json(tmp_path):
+    assert main(["train", "reach2", "--steps", "50", "--no-progress", "--out", str(tmp_path)]) == 0
+    def no_nan(constant):
+        raise AssertionError(f"summary.json holds {constant}, which is not JSON")
+
+    summary = json.loads((tmp_path / "summary.json").read_text(), parse_constant=no_nan)
+    assert summary["final_mean_reward"] is None and summary["final_window_steps"] == 0

@@ -15,7 +15,7 @@ from somarm.reproduce import arms, throws
 from somarm.reproduce.common import Context
 from somarm.reproduce.report import Section, render
 
-__all__ = ["EXPERIMENTS", "reproduce"]
+__all__ = ["EXPERIMENTS", "check_names", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -27,6 +27,15 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "neighbourhood_q": throws.neighbourhood_q,
     "more_inputs": throws.more_inputs,
 }
+
+
+def check_names(only: list[str] | None) -> list[str]:
+    """The experiments to run, in the paper's order; ValueError listing the names for an unknown one."""
+    names = list(only or EXPERIMENTS)
+    unknown = [n for n in names if n not in EXPERIMENTS]
+    if unknown:
+        raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join(EXPERIMENTS)}")
+    return names
 
 
 def reproduce(
@@ -41,10 +50,7 @@ def reproduce(
     Raises:
       ValueError: an unknown experiment name (the message lists the names).
     """
-    names = list(only or EXPERIMENTS)
-    unknown = [n for n in names if n not in EXPERIMENTS]
-    if unknown:
-        raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join(EXPERIMENTS)}")
+    names = check_names(only)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     ctx = Context(out_dir=out, quick=quick, seed=seed, progress=progress)
     sections: list[Section] = []
