@@ -58,68 +58,141 @@ class Preset:
 #: together) and reach2 ends at a mean distance of about 0.19 after 30,000 steps; read as 0.1 of the
 #: normalised range (0.63 rad) it ends near 0.036. This project reads it as normalised
 #: (``epsilon_relative=True``); ``--set epsilon_relative=false`` gives the literal reading.
-_RELATIVE_EPSILON = ("epsilon is a fraction of each action range (angles normalised to [0, 1] as the paper "
-                     "plots them), not radians")
+_RELATIVE_EPSILON = (
+    "epsilon is a fraction of each action range (angles normalised to [0, 1] as the paper "
+    "plots them), not radians; read as radians, reach2 ends 0.19 from its goals after 30,000 "
+    "steps instead of 0.036"
+)
 
 
 def _table1() -> Preset:
     f = InverseDecay(1000.0)
     config = SOMQConfig(
-        input_shape=(50,), action_shape=(50,), alpha=Schedule(1.0, f), lambda_s=Schedule(1.0, f),
-        lambda_a=Schedule(1.0, f), n_s=Schedule(20.0, f), n_a=Schedule(20.0, f), p=Schedule(1.0, f),
-        epsilon=Schedule(0.1, f), input_init=(0.0, 1.0), epsilon_relative=True,
+        input_shape=(50,),
+        action_shape=(50,),
+        alpha=Schedule(1.0, f),
+        lambda_s=Schedule(1.0, f),
+        lambda_a=Schedule(1.0, f),
+        n_s=Schedule(20.0, f),
+        n_a=Schedule(20.0, f),
+        p=Schedule(1.0, f),
+        epsilon=Schedule(0.1, f),
+        input_init=(0.0, 1.0),
+        epsilon_relative=True,
     )
-    return Preset("table1", "Table 1: reach2 (Figs. 7-10), 50x1 input and action maps, f = 1/(t/1000+1)",
-                  config, "reach2", "7, 8, 9, 10 (and 11 with reach20)", 20, 1000,
-                  choices=(_RELATIVE_EPSILON,))
+    return Preset(
+        "table1",
+        "Table 1: reach2 (Figs. 7-10), 50x1 input and action maps, f = 1/(t/1000+1)",
+        config,
+        "reach2",
+        "7, 8, 9, 10 (and 11 with reach20)",
+        20,
+        1000,
+        choices=(_RELATIVE_EPSILON,),
+    )
 
 
 def _table2() -> Preset:
     f = InverseDecay(500.0)
     config = SOMQConfig(
-        input_shape=(10, 10), action_shape=(8,), alpha=Schedule(1.0, f, 0.1), lambda_s=Schedule(1.0, f),
-        lambda_a=Schedule(1.0, f, 0.1), n_s=Schedule(10.0, f), n_a=Schedule(3.0, f), p=Schedule(0.25, f),
-        epsilon=Schedule(0.1, f, 0.01), input_init=(0.0, 1.0), epsilon_relative=True,
+        input_shape=(10, 10),
+        action_shape=(8,),
+        alpha=Schedule(1.0, f, 0.1),
+        lambda_s=Schedule(1.0, f),
+        lambda_a=Schedule(1.0, f, 0.1),
+        n_s=Schedule(10.0, f),
+        n_a=Schedule(3.0, f),
+        p=Schedule(0.25, f),
+        epsilon=Schedule(0.1, f, 0.01),
+        input_init=(0.0, 1.0),
+        epsilon_relative=True,
     )
     text = "Table 2: four_goals (Figs. 13-15), 10x10 input, 8x1 actions, f = 1/(t/500+1), floors"
-    return Preset("table2", text, config, "four_goals", "13 A, 14, 15", 20, 100,
-                  choices=("input weights start in [0, 1] as Table 1", _RELATIVE_EPSILON))
+    return Preset(
+        "table2",
+        text,
+        config,
+        "four_goals",
+        "13 A, 14, 15",
+        20,
+        100,
+        choices=("input weights start in [0, 1] as Table 1", _RELATIVE_EPSILON),
+    )
 
 
 def _table4() -> Preset:
     f = ExponentialDecay(0.999)
     config = SOMQConfig(
-        input_shape=(1,), action_shape=(30,), alpha=Schedule(1.0, f, 0.05), lambda_s=Schedule(1.0, f),
-        lambda_a=Schedule(1.0, f, 0.1), n_s=Schedule(0.0), n_a=Schedule(15.0, f, 2.0),
-        p=Schedule(1.0, f, 0.5), epsilon=Schedule(1.0, f, 0.1),
+        input_shape=(1,),
+        action_shape=(30,),
+        alpha=Schedule(1.0, f, 0.05),
+        lambda_s=Schedule(1.0, f),
+        lambda_a=Schedule(1.0, f, 0.1),
+        n_s=Schedule(0.0),
+        n_a=Schedule(15.0, f, 2.0),
+        p=Schedule(1.0, f, 0.5),
+        epsilon=Schedule(1.0, f, 0.1),
     )
     text = "Table 4: throw (Fig. 17), one input unit, 30x1 actions, f = 0.999^throw, floors"
-    return Preset("table4", text, config, "throw", "17", 1, None, n_steps=4000,
-                  choices=("single input unit: lambda_S = f and N_S = 0 (never used)",
-                           "input weights start in the observation bounds"))
+    return Preset(
+        "table4",
+        text,
+        config,
+        "throw",
+        "17",
+        1,
+        None,
+        n_steps=4000,
+        choices=(
+            "single input unit: lambda_S = f and N_S = 0 (never used)",
+            "input weights start in the observation bounds",
+        ),
+    )
 
 
 def _table5() -> Preset:
     f = ExponentialDecay(0.9985)
     config = SOMQConfig(
-        input_shape=(30,), action_shape=(30,), alpha=Schedule(1.0, f), lambda_s=Schedule(0.3, f),
-        lambda_a=Schedule(1.0, f), n_s=Schedule(15.0, f), n_a=Schedule(25.0, f), p=Schedule(1.0, f),
+        input_shape=(30,),
+        action_shape=(30,),
+        alpha=Schedule(1.0, f),
+        lambda_s=Schedule(0.3, f),
+        lambda_a=Schedule(1.0, f),
+        n_s=Schedule(15.0, f),
+        n_a=Schedule(25.0, f),
+        p=Schedule(1.0, f),
         epsilon=Schedule(1.0, f),
     )
     text = "Table 5: throw_distance (Figs. 21, 24 +NL/0.9985), 30x1 maps, f = 0.9985^throw"
     figures = "21, 24 (-NL: neighbourhood_q=false; -NL/0.9997: also decay=exp:0.9997)"
-    return Preset("table5", text, config, "throw_distance", figures, 20, 100,
-                  choices=("alpha, lambda_A, p, epsilon from Table 4 without floors",
-                           "input weights start in the observation bounds"))
+    return Preset(
+        "table5",
+        text,
+        config,
+        "throw_distance",
+        figures,
+        20,
+        100,
+        choices=(
+            "alpha, lambda_A, p, epsilon from Table 4 without floors",
+            "input weights start in the observation bounds",
+        ),
+    )
 
 
 def _table7(name: str) -> Preset:
     single = name == "table7a"
     f = ExponentialDecay(0.9985 if single else 0.9997)
     config = SOMQConfig(
-        input_shape=(30,) if single else (10, 10), action_shape=(30,), alpha=Schedule(1.0, f),
-        lambda_s=Schedule(0.3, f), lambda_a=Schedule(1.0, f), n_s=Schedule(7.0, f), n_a=Schedule(7.0, f),
-        p=Schedule(1.0, f), epsilon=Schedule(1.0, f),
+        input_shape=(30,) if single else (10, 10),
+        action_shape=(30,),
+        alpha=Schedule(1.0, f),
+        lambda_s=Schedule(0.3, f),
+        lambda_a=Schedule(1.0, f),
+        n_s=Schedule(7.0, f),
+        n_a=Schedule(7.0, f),
+        p=Schedule(1.0, f),
+        epsilon=Schedule(1.0, f),
     )
     if single:
         text = "Table 7, experiment A: throw_distance (Fig. 25 A), 30x1 input, N_S = 7 f, f = 0.9985^throw"
@@ -127,8 +200,9 @@ def _table7(name: str) -> Preset:
     else:
         text = "Table 7: throw_wind/friction/mass (Fig. 25 B-D), 10x10 input, 30x1 actions, f = 0.9997^throw"
         task = "throw_wind"
-    return Preset(name, text, config, task, "25", 100, 100,
-                  choices=("input weights start in the observation bounds",))
+    return Preset(
+        name, text, config, task, "25", 100, 100, choices=("input weights start in the observation bounds",)
+    )
 
 
 PRESETS: dict[str, Preset] = {

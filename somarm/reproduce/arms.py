@@ -5,7 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from somarm import evaluation, metrics, plots
-from somarm.reproduce.common import Context, final_error, fmt, run, run_group, typical_trial
+from somarm.reproduce.common import (
+    MOTORIC_CHOICE,
+    Context,
+    final_error,
+    fmt,
+    preset_choices,
+    run,
+    run_group,
+    typical_trial,
+)
 from somarm.reproduce.report import Claim, Section
 from somarm.training import RunConfig
 
@@ -36,6 +45,7 @@ def reach2(ctx: Context) -> Section:
     learner, task = result.learner, result.task
     errors = final_error(result, 1000)
     section = Section("reach2", "Figs. 7-10: two-link arm, goals on a circle (Table 1)")
+    section.choices += preset_choices("table1")
     section.choices += [
         f"Run length {n_steps} steps (the paper's axis is not given); data points are means over the "
         "last 1000 steps as in Fig. 7.",
@@ -176,6 +186,7 @@ def reach20(ctx: Context) -> Section:
     result = run(ctx, "Fig 11 reach20", config)
     learner, task = result.learner, result.task
     section = Section("reach20", "Fig. 11: twenty-link arm, postures for a sweep of goals (Table 1)")
+    section.choices += preset_choices("table1")
     section.choices += [
         f"Table 1's parameters with a 20-D action map; {n_trials} trials of {n_steps} steps.",
         "Posture distance: root-mean-square of the wrapped joint-angle differences. 'Nearby goals, similar "
@@ -254,6 +265,8 @@ def four_goals(ctx: Context) -> Section:
     ]
     runs = dict(zip(kinds, run_group(ctx, "Fig 13 four_goals", configs, snapshots_at=(switch,)), strict=True))
     section = Section("four_goals", "Figs. 13-15: four goals, moved at t = 20,000 (Table 2)")
+    section.choices += preset_choices("table2")
+    section.choices.append(MOTORIC_CHOICE)
     section.choices += [
         f"{n_trials} trials of {n_steps} steps, goals moved at t = {switch}; goal positions before and "
         "after the move are this project's (see the task).",

@@ -10,7 +10,16 @@ import numpy as np
 from somarm import training
 from somarm.training import RunConfig, RunResult
 
-__all__ = ["Context", "run", "run_group", "typical_trial", "final_error", "fmt"]
+__all__ = [
+    "Context",
+    "MOTORIC_CHOICE",
+    "preset_choices",
+    "run",
+    "run_group",
+    "typical_trial",
+    "final_error",
+    "fmt",
+]
 
 
 @dataclass(frozen=True)
@@ -43,6 +52,27 @@ def run_group(
 ) -> list[RunResult]:
     """Train configurations that share a task in lockstep: one physics call per step for all."""
     return training.train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+
+
+def preset_choices(*names: str) -> list[str]:
+    """The choices the named presets make where their tables are silent, as report lines."""
+    from somarm import presets
+
+    return [
+        f"Preset `{name}` ({presets.PRESETS[name].description.split(':')[0]}): {choice}."
+        for name in names
+        for choice in presets.PRESETS[name].choices
+    ]
+
+
+#: How the Motoric Map baseline reads the paper's one sentence about it.
+MOTORIC_CHOICE = (
+    "Motoric Map (graph B): each input unit keeps one action and a value; the action is copied and perturbed "
+    "as in SOM-Q; when the reward beats the unit's value, the actions move towards the perturbed action over "
+    "an input-grid neighbourhood N_A = 3 f(t) (Table 2's number; as in Ritter, Martinetz and Schulten's motor "
+    "maps; N_A = 0 would make them strictly private, which barely moves in 40,000 steps); values move by "
+    "alpha over the input neighbourhood."
+)
 
 
 def final_error(result: RunResult, window: int) -> np.ndarray:

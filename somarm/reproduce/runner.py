@@ -92,8 +92,9 @@ def _write(
         + (f"; slowest experiment `{slowest.name}` ({slowest.wall_time_s:.1f} s)." if slowest else ".")
         + ("" if complete else " **Incomplete: not every experiment has run.**"),
         "",
-        "Arm lengths, the goal circle, the four goals, run lengths and the levels and bounds used in the "
-        "verdicts are this project's choices, stated in each part; the paper publishes none of them.",
+        "Arm lengths, the goal circle, the four goals, the reading of epsilon in Tables 1 and 2 (a fraction of "
+        "the angle range), the Motoric Map's rules, run lengths and the levels and bounds used in the verdicts "
+        "are this project's choices, stated in each part; the paper publishes none of them.",
     ]
     atomic_write_text(out / "REPORT.md", render(sections, header=header, out_dir=out))
     atomic_write_json(
