@@ -19,6 +19,8 @@ def test_render_lists_every_claim_and_figure(tmp_path):
     assert "| demo | It works. | 3 of 3 | >= 3 | **holds** |" in text
     assert "**does not hold**" in text and "![a](figures/a.png)" in text
     assert "run length 10 (ours)" in text
+    odd = render([Section("x", "X", claims=[Claim("a", "mean |d| 0.3", True)])], header=[], out_dir=tmp_path)
+    assert "| x | a | mean \\|d\\| 0.3 |  | **holds** |" in odd
 
 
 def _check_report(out: Path, names: list[str]) -> dict:

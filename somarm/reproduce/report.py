@@ -49,8 +49,8 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
     ]
     for section in sections:
         for c in section.claims:
-            verdict = _verdict(c.holds)
-            lines.append(f"| {section.name} | {c.claim} | {c.measured} | {c.test} | **{verdict}** |")
+            cells = [section.name, c.claim, c.measured, c.test, f"**{_verdict(c.holds)}**"]
+            lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
     for section in sections:
         lines += [
             "",
