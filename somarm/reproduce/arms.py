@@ -30,11 +30,14 @@ def _fit_circle(points: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def _overlay_schedule(ax, steps: np.ndarray, decay, label: str) -> None:
+    """f(t) on a second y axis, with one legend for both axes (so neither hides the other)."""
     twin = ax.twinx()
     twin.plot(steps, decay(steps), ls=":", color="k", label=label)
     twin.set_ylabel("annealing schedule f(t)")
     twin.set_ylim(0, 1.05)
-    twin.legend(loc="center right")
+    handles, labels = ax.get_legend_handles_labels()
+    more_handles, more_labels = twin.get_legend_handles_labels()
+    twin.legend(handles + more_handles, labels + more_labels, loc="center right")
 
 
 def reach2(ctx: Context) -> Section:
@@ -70,7 +73,6 @@ def reach2(ctx: Context) -> Section:
         title="Fig. 7: reach2, mean reward over trials (Table 1)",
     )
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower center")
     decay = learner.config.alpha.decay
     _overlay_schedule(ax, result.steps, decay, f"f(t) = {decay}")
     section.figures.append(plots.save(fig, ctx.path("fig07_reach2_mean.png")))
