@@ -42,6 +42,17 @@ def _winner(x, weights):
 
 
 @numba.njit(cache=True)
+def _pull(weights, x, rate, psi):
+    """The SOM update of one map towards ``x``: ``w += rate * psi * (x - w)`` where psi > 0, in place."""
+    for m in range(weights.shape[0]):
+        if psi[m] > 0.0:
+            step = rate * psi[m]
+            for i in range(x.shape[0]):
+                w = weights[m, i]
+                weights[m, i] = w + step * (x[i] - w)
+
+
+@numba.njit(cache=True)
 def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high,
                gaussian, winners, units, actions):
     """Steps 1 to 5 for every trial; fills ``winners``, ``units`` and ``actions`` in place.
@@ -118,12 +129,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
             psi_a[n] = max(0.0, 1.0 - distances_a[k, n] / (n_a + 1.0))
         # Step 7: the action map learns only if the perturbed action looks like an improvement.
         if target > q[trial, j, k]:
-            for m in range(n_units_a):
-                if psi_a[m] > 0.0:
-                    rate = lambda_a * psi_a[m]
-                    for i in range(actions.shape[1]):
-                        w = action_weights[trial, m, i]
-                        action_weights[trial, m, i] = w + rate * (actions[trial, i] - w)
+            _pull(action_weights[trial], actions[trial], lambda_a, psi_a)
         # Step 8: neighbourhood Q-learning, or the winning pair alone.
         if neighbourhood_q:
             for m in range(n_units_s):
@@ -137,9 +143,4 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
             value = q[trial, j, k]
             q[trial, j, k] = value + alpha * (target - value)
         # Step 9: the input map moves towards the observation.
-        for m in range(n_units_s):
-            if psi_s[m] > 0.0:
-                rate = lambda_s * psi_s[m]
-                for i in range(observations.shape[1]):
-                    w = input_weights[trial, m, i]
-                    input_weights[trial, m, i] = w + rate * (observations[trial, i] - w)
+        _pull(input_weights[trial], observations[trial], lambda_s, psi_s)

@@ -111,14 +111,6 @@ class UniformStreams:
         self._pos += 1
         return row
 
-    def next_block(self) -> np.ndarray:
-        """All rows left in the current block, shape ``(n_trials, rows, width)``, rows >= 1."""
-        if self._pos == self.block:
-            self._refill()
-        rows = self._buffer[:, self._pos :]
-        self._pos = self.block
-        return rows
-
     # -- save / restore -------------------------------------------------------------------
     def get_state(self) -> dict[str, Any]:
         """Everything needed to continue the streams exactly: JSON-able plus one array."""

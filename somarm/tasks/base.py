@@ -8,7 +8,6 @@ stream as trial ``trial_id`` of the batch and computes its reward from its own M
 
 from __future__ import annotations
 
-import dataclasses
 from collections import OrderedDict
 from typing import Any, ClassVar, Literal
 
@@ -150,10 +149,6 @@ class OneStepTask:
     def sample_observations(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` fresh observations ``(n, obs_dim)`` drawn with ``rng``."""
         return self.observations_from(rng.random((int(n), self.uniform_width)))
-
-    def describe_params(self) -> dict[str, Any]:
-        """The task's parameters as a JSON-able dict (saved with a run)."""
-        return dataclasses.asdict(self.params)
 
 
 class OneStepEnvTask(base.Task):
