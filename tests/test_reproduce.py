@@ -1,4 +1,9 @@
+import os
 import re
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -57,3 +62,41 @@ def test_quick_reproduce_every_experiment(tmp_path):
 def test_unknown_experiment_lists_the_names(tmp_path):
     with pytest.raises(ValueError, match="allowed: reach2"):
         runner.reproduce(tmp_path, quick=True, only=["fig99"])
+
+
+def test_ctrl_c_stops_the_whole_reproduction_and_keeps_finished_parts(tmp_path):
+    # reach2 (quick) finishes in seconds; the signal arrives during the much longer throw_maps.
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "somarm.cli",
+            "reproduce",
+            "--quick",
+            "--no-progress",
+            "--out",
+            str(tmp_path),
+            "--only",
+            "reach2",
+            "throw_maps",
+            "more_inputs",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "disable"},
+    )
+    try:
+        deadline = time.monotonic() + 120
+        line = ""
+        while not line.startswith("reach2:") and time.monotonic() < deadline:
+            line = proc.stderr.readline()
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    claims = runner.load_claims(tmp_path)
+    assert claims["complete"] is False and list(claims["experiments"]) == ["reach2"]
+    assert "Incomplete" in (tmp_path / "REPORT.md").read_text()

@@ -44,14 +44,22 @@ class Context:
 
 def run(ctx: Context, label: str, config: RunConfig, *, snapshots_at: tuple[int, ...] = ()) -> RunResult:
     """Train one configuration (every evaluation through the task's default MuJoCo backend)."""
-    return training.train(config, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+    return run_group(ctx, label, [config], snapshots_at=snapshots_at)[0]
 
 
 def run_group(
     ctx: Context, label: str, configs: list[RunConfig], *, snapshots_at: tuple[int, ...] = ()
 ) -> list[RunResult]:
-    """Train configurations that share a task in lockstep: one physics call per step for all."""
-    return training.train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+    """Train configurations that share a task in lockstep: one physics call per step for all.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (Ctrl-C or SIGTERM stop it between steps); an
+        experiment must not go on to draw conclusions from a partial run, so the reproduction stops.
+    """
+    results = training.train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+    if any(result.interrupted for result in results):
+        raise KeyboardInterrupt
+    return results
 
 
 def preset_choices(*names: str) -> list[str]:

@@ -67,5 +67,5 @@ def attach_feed(bridge, task_name: str, task_params: dict | None) -> str:
             failures.append(exc)
 
     ZMQStream(socket).on_recv(on_frame)
-    bridge.feed_socket = socket
+    bridge.feed_socket = socket  # held by the bridge so the socket lives as long as the server
     return socket.getsockopt(zmq.LAST_ENDPOINT).decode()
