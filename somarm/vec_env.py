@@ -42,6 +42,8 @@ class BatchedVecEnv(VecEnv):
       ValueError: bad ``n_envs``, unknown task, parameter or backend (one line).
     """
 
+    render_mode = None  #: nothing renders here; the meshcat viewer is ``somarm view``
+
     def __init__(self, task: str, n_envs: int = 1, *, seed: int = 0, backend: str = "mujoco", **params: Any):
         self.task_name = task
         self._make_kwargs = {"n_trials": check_int("n_envs", n_envs), "backend": backend, **params}
