@@ -37,15 +37,17 @@ __all__ = [
     "override_config",
 ]
 
-_KINDS = ("somq", "motoric")
+_KINDS = ("somq", "motoric", "tabular")
 
 
 def __getattr__(name: str) -> Any:
     if name == "LEARNERS":
         from .motoric import MotoricConfig, MotoricMap
         from .somq import SOMQ, SOMQConfig
+        from .tabular import TabularConfig, TabularQ
 
-        registry = {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap)}
+        registry = {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap),
+                    "tabular": (TabularConfig, TabularQ)}
         globals()["LEARNERS"] = registry  # from now on an ordinary module attribute
         return registry
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -61,7 +63,7 @@ def make_learner(kind: str, config: Any = None, **kwargs: Any):
     """Build a learner by kind.
 
     Args:
-      kind: ``"somq"`` or ``"motoric"``.
+      kind: ``"somq"``, ``"motoric"`` or ``"tabular"``.
       config: its config (default: the config class's defaults).
       **kwargs: the learner's keywords (observation_low, ..., n_trials, seed, trial_ids).
 
