@@ -1,4 +1,4 @@
-"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view."""
+"""The ``somarm`` command line: tasks, presets, train, evaluate, compare, reproduce, bench, view."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from pathlib import Path
 
 __all__ = ["main"]
 
-_BENCHMARKS = ("learner", "tasks", "viewer")
+_BENCHMARKS = ("learner", "tasks", "viewer", "adapters")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -162,6 +162,26 @@ def _cmd_reproduce(args) -> int:
     return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
 
 
+def _cmd_compare(args) -> int:
+    from somarm import compare, training
+
+    config = compare.CompareConfig(
+        task=args.task,
+        learners=tuple(k.strip() for k in args.learners.split(",") if k.strip()),
+        samples=args.samples,
+        peer_samples=args.peer_samples,
+        seeds=args.seeds,
+        observations=args.observations,
+        task_params=training.task_kwargs(training.parse_assignments(args.task_set, "--task-set")),
+    )
+    compare.check(config)
+    out = _check_writable(Path(args.out or f"compare/{config.task}"))
+    _stop_on_sigterm()
+    compare.compare(config, out, progress=not args.no_progress)
+    print(f"comparison written to {out / 'compare.json'} and {out / 'compare.png'}")
+    return 0
+
+
 def _cmd_forward(module: str, argv: list[str]) -> int:
     return int(importlib.import_module(module).main(argv) or 0)
 
@@ -211,7 +231,20 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
     reproduce.set_defaults(func=_cmd_reproduce)
 
-    bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer (pass --help after the name)")
+    comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")
+    comp.add_argument("task", help="task name (see `somarm tasks`)")
+    comp.add_argument("--learners", default="somq,motoric,tabular,td3,sac",
+                      help="comma-separated, from somq, motoric, tabular, td3, sac (default: all five)")
+    comp.add_argument("--samples", type=int, default=10_000, help="training samples (default 10000)")
+    comp.add_argument("--peer-samples", type=int, help="training samples of td3 and sac (default --samples)")
+    comp.add_argument("--seeds", type=int, default=3, help="seeds 0..K-1 for every learner (default 3)")
+    comp.add_argument("--observations", type=int, default=1000, help="fresh observations scored (1000)")
+    comp.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
+    comp.add_argument("--out", help="output folder (default compare/TASK)")
+    comp.add_argument("--no-progress", action="store_true", help="no progress lines")
+    comp.set_defaults(func=_cmd_compare)
+
+    bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer, adapters (pass --help after the name)")
     bench.add_argument("name", choices=_BENCHMARKS)
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
     return parser

@@ -10,12 +10,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from somarm import __version__
+from somarm.compare import peers_missing
 from somarm.io import atomic_write_json, atomic_write_text
-from somarm.reproduce import arms, throws
+from somarm.reproduce import arms, peers, throws
 from somarm.reproduce.common import Context
 from somarm.reproduce.report import Section, render
 
-__all__ = ["EXPERIMENTS", "check_names", "reproduce", "load_claims"]
+__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -28,13 +29,18 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "more_inputs": throws.more_inputs,
 }
 
+#: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
+OPTIONAL: dict[str, Callable[[Context], Section]] = {"peers": peers.peers}
+
 
 def check_names(only: list[str] | None) -> list[str]:
     """The experiments to run, in the paper's order; ValueError listing the names for an unknown one."""
     names = list(only or EXPERIMENTS)
-    unknown = [n for n in names if n not in EXPERIMENTS]
+    unknown = [n for n in names if n not in EXPERIMENTS and n not in OPTIONAL]
     if unknown:
-        raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join(EXPERIMENTS)}")
+        raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join([*EXPERIMENTS, *OPTIONAL])}")
+    if "peers" in names and (reason := peers_missing()):
+        raise ValueError(reason)
     return names
 
 
@@ -59,7 +65,7 @@ def reproduce(
     for name in names:
         began = time.perf_counter()
         try:
-            section = EXPERIMENTS[name](ctx)
+            section = {**EXPERIMENTS, **OPTIONAL}[name](ctx)
         except KeyboardInterrupt:
             print(
                 f"\ninterrupted during {name}; the report holds the experiments that finished",
