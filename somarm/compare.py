@@ -22,7 +22,8 @@ import numpy as np
 from somarm import __version__, evaluation, tasks
 from somarm.io import atomic_write_json
 
-__all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "ladder", "check", "compare", "peers_missing"]
+__all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "ladder", "check", "compare", "peers_missing",
+           "task_defaults"]
 
 OURS = ("somq", "motoric", "tabular")
 PEERS = ("td3", "sac")
@@ -77,11 +78,18 @@ def _bounds(task) -> dict[str, np.ndarray]:
                 action_low=task.action_low, action_high=task.action_high)
 
 
+def task_defaults(task: str) -> tuple[str, int]:
+    """The task's default preset and run length (somarm's learners train that long in the report)."""
+    from somarm import training
+
+    return training.TASK_DEFAULTS[task]
+
+
 def _our_config(kind: str, task: str):
-    from somarm import presets, training
+    from somarm import presets
     from somarm.tabular import TabularConfig
 
-    return TabularConfig() if kind == "tabular" else presets.config_for(kind, training.TASK_DEFAULTS[task][0])
+    return TabularConfig() if kind == "tabular" else presets.config_for(kind, task_defaults(task)[0])
 
 
 def check(config: CompareConfig) -> list[str]:

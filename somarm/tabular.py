@@ -57,6 +57,8 @@ class TabularConfig:
     gamma: float = 0.0
     """Discount in [0, 1]; 0 = the immediate reward of the paper's tasks."""
 
+    SCHEDULES = ("epsilon",)
+
     def __post_init__(self) -> None:
         check_int("observation_bins", self.observation_bins)
         check_int("action_bins", self.action_bins)
@@ -84,6 +86,14 @@ class TabularConfig:
         if isinstance(values.get("epsilon"), dict):
             values["epsilon"] = Schedule.from_dict(values["epsilon"])
         return cls(**values)
+
+    @classmethod
+    def from_table(cls, table: Any) -> TabularConfig:
+        """The tabular counterpart of a paper table (a ``SOMQConfig``): its p explores, its gamma discounts.
+
+        SOM-Q's epsilon is a perturbation size, not an exploration probability, so it is not taken.
+        """
+        return cls(epsilon=table.p, gamma=table.gamma)
 
 
 class TabularQ:
@@ -115,7 +125,7 @@ class TabularQ:
         self.seed = check_int("seed", seed, minimum=0)
         self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
         obs_dim, action_dim = self.observation_low.size, self.action_low.size
-        self._cell_shape = (config.observation_bins,) * obs_dim
+        self._cell_strides = config.observation_bins ** np.arange(obs_dim - 1, -1, -1, dtype=np.int64)
         n_cells = config.observation_bins ** obs_dim
         n_actions = config.action_bins ** action_dim
         if n_cells * n_actions > MAX_TABLE_ENTRIES:
@@ -160,8 +170,9 @@ class TabularQ:
             raise ValueError("observations must be finite, got NaN or inf")
         bins = self.config.observation_bins
         fraction = (x - self.observation_low) / (self.observation_high - self.observation_low)
-        per_dim = np.clip(np.floor(fraction * bins).astype(np.int64), 0, bins - 1)
-        return np.ravel_multi_index(tuple(np.moveaxis(per_dim, -1, 0)), self._cell_shape)
+        per_dim = np.floor(fraction * bins).astype(np.int64)
+        np.clip(per_dim, 0, bins - 1, out=per_dim)
+        return per_dim @ self._cell_strides  # the C-order index of the cell
 
     def _greedy(self, cells: np.ndarray) -> np.ndarray:
         """Best tried action of each cell ``(n_trials, ...) -> (n_trials, ...)``; see the module rules."""

@@ -120,3 +120,12 @@ def test_gamma_bootstraps_from_the_next_cell():
     learner.act(np.array([[0.1]]))
     with pytest.raises(ValueError, match="next_observations"):
         learner.learn(np.array([0.0]), terminal=False)
+
+
+def test_a_paper_table_gives_its_exploration_probability_and_discount():
+    from somarm import presets
+
+    table = presets.get("table5")
+    config = TabularConfig.from_table(table)
+    assert config.epsilon == table.p and config.gamma == table.gamma
+    assert TabularConfig.from_dict(config.to_dict()) == config

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm import compare, training
+from somarm import compare
 from somarm.plots_compare import NAMES
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
@@ -50,7 +50,7 @@ def peers(ctx: Context) -> Section:
     section = Section("peers", "Peers: SOM-Q beside a fixed action grid, TD3 and SAC (Stable-Baselines3)")
     seeds = ctx.pick(2, 1)
     peer_samples = ctx.pick(1000, 120)
-    budgets = {task: ctx.pick(training.TASK_DEFAULTS[task][1], 200) for task in TASKS}
+    budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
     results = {}
     for task, learners in TASKS.items():
         samples = budgets[task]
