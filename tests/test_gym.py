@@ -129,3 +129,12 @@ def test_td3_learns_a_few_steps_through_the_vec_env():
                     device="cpu")
         model.learn(64)
     assert model.num_timesteps == 64 and model.replay_buffer.size() == 8
+
+
+def test_the_adapters_benchmark_prints_every_path(capsys):
+    from somarm.cli import main
+
+    assert main(["bench", "adapters", "--envs", "4", "--steps", "5", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    for label in ("task batched", "BatchedVecEnv", "task single", "gymnasium env", "SyncVectorEnv", "overhead"):
+        assert label in out
