@@ -9,10 +9,13 @@ BOX = dict(observation_low=[0.0, 0.0], observation_high=[1.0, 1.0], action_low=[
 
 
 def test_registry():
-    assert learners.LEARNERS == {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap)}
+    from somarm.tabular import TabularConfig, TabularQ
+
+    assert learners.LEARNERS == {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap),
+                                 "tabular": (TabularConfig, TabularQ)}
 
 
-@pytest.mark.parametrize("kind", ["somq", "motoric"])
+@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
 def test_make_and_load_any_kind(tmp_path, kind):
     learner = learners.make_learner(kind, None, n_trials=2, seed=3, **BOX)
     assert learner.kind == kind
