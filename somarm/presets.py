@@ -21,7 +21,6 @@ neighbourhood, on the input grid, uses Table 2's N_A = 3 f(t). That mapping is t
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 from .motoric import MotoricConfig

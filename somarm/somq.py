@@ -24,7 +24,7 @@ action boxes, observations, actions and rewards. Rules where the paper is brief:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
