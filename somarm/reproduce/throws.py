@@ -7,7 +7,7 @@ import numpy as np
 from somarm import ballistics, evaluation, metrics, plots
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, run_group, typical_trial
 from somarm.reproduce.report import Claim, Section
-from somarm.training import RunConfig
+from somarm.run import RunConfig
 
 __all__ = ["throw", "throw_maps", "neighbourhood_q", "more_inputs"]
 

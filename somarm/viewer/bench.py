@@ -29,7 +29,7 @@ _CHROMIUM_ARGS = ["--no-sandbox", "--headless=new", "--enable-unsafe-swiftshader
 
 def _train_seconds(config, hook) -> tuple[float, float, int]:
     """Wall seconds, CPU seconds of this process, steps done."""
-    from somarm.training import train
+    from somarm.run import train
 
     start, cpu = time.perf_counter(), time.process_time()
     result = train(config, progress=False, on_step=hook)
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rate", type=float, default=30.0, help="LiveView max_rate_hz")
     args = parser.parse_args(argv)
 
-    from somarm.training import RunConfig
+    from somarm.run import RunConfig
     from somarm.viewer.live import LiveView
 
     config = RunConfig(task=args.task, n_steps=args.steps, n_trials=args.trials, block=100)

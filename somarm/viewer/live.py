@@ -44,9 +44,7 @@ def own_task(task_name: str, task_params: dict | None):
         make = tasks.make
     except (ImportError, AttributeError):  # no task registry: the shows use the models' conventions
         return None
-    from somarm.training import task_kwargs
-
-    return make(task_name, n_trials=1, **task_kwargs(task_params or {}))
+    return make(task_name, n_trials=1, **tasks.parse_values(task_params or {}))
 
 
 class LiveView:

@@ -76,22 +76,22 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     Raises:
       ValueError: the run is for another task, or ``trial`` is not one of its trials.
     """
-    from somarm import tasks, training
+    from somarm import run as runs  # `run` is this function's folder argument
+    from somarm import tasks
 
     if run is not None:
-        config, learner = training.load_run(run)
+        config, learner = runs.load(run)
         if config.task != task_name:
             raise ValueError(f"--run {run} trained task {config.task!r}, not {task_name!r}")
-        task_params = training.task_kwargs(config.task_params)
+        task_params = tasks.parse_values(config.task_params)
     else:
-        config = training.RunConfig(task=task_name, seed=seed).resolved()
-        _, learner = training.build(config)
+        config = runs.RunConfig(task=task_name, seed=seed).resolved()
+        _, learner = runs.make(config)
         task_params = {}
     if not 0 <= trial < learner.n_trials:
         raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
-    if hasattr(task, "set_step"):
-        task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
+    task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
     observations = observations[_sweep_order(observations)]
