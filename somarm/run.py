@@ -63,10 +63,11 @@ class RunConfig:
     task: str = field(metadata=_option("task", "task name (see `somarm tasks`)"))
     """Registered task name (``somarm tasks`` lists them)."""
     learner: str = field(default="somq", metadata=_option(
-        "--learner", "learner kind: somq (the paper's model) or motoric (the Fig. 13 B baseline)"))
+        "--learner", "learner kind: somq (the paper's model) or motoric (the Fig. 13 B baseline)",
+        metavar="KIND"))
     """A kind of ``somarm.learners.KINDS``: ``somq`` (the paper's model) or ``motoric`` (Fig. 13 B)."""
     preset: str | None = field(default=None, metadata=_option(
-        "--preset", "parameter table (see `somarm presets`); default: the task's"))
+        "--preset", "parameter table (see `somarm presets`); default: the task's", metavar="TABLE"))
     """Parameter table by name (``table1`` ...); None takes the task's default."""
     overrides: dict[str, str] = field(default_factory=dict, metadata=_option(
         "--set", "change a learner setting", action="append", metavar="KEY=VALUE"))
@@ -74,16 +75,16 @@ class RunConfig:
     task_params: dict[str, Any] = field(default_factory=dict, metadata=_option(
         "--task-set", "change a task parameter", action="append", metavar="KEY=VALUE"))
     """Task parameters changed from their defaults (``--task-set KEY=VALUE``)."""
-    n_trials: int = field(default=1, metadata=_option("--trials", "independent trials", type=int))
+    n_trials: int = field(default=1, metadata=_option("--trials", "independent trials", type=int, metavar="N"))
     """Independent trials advanced together (each has its own random streams)."""
     n_steps: int | None = field(default=None, metadata=_option(
-        "--steps", "training steps; default: the task's", type=int))
+        "--steps", "training steps; default: the task's", type=int, metavar="N"))
     """Training steps (one-step episodes); None takes the task's default."""
-    seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=int))
+    seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=int, metavar="S"))
     """The run's seed: every random number of the run derives from it."""
-    backend: str = field(default="mujoco", metadata=_option("--backend", "mujoco or analytic"))
+    backend: str = field(default="mujoco", metadata=_option("--backend", "mujoco or analytic", metavar="NAME"))
     """Where rewards are computed: ``mujoco`` (default) or ``analytic``."""
-    block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=int))
+    block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=int, metavar="N"))
     """Steps per recorded point of the learning curves (mean reward over the block)."""
     trial_ids: list[int] | None = field(default=None, metadata=_option(
         "--trial-ids", "run these trials only, e.g. 7 to replay trial 7 of a batch alone",

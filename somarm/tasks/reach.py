@@ -136,6 +136,7 @@ def _record(n_links: int, figure: str) -> TaskRecord:
         model=f"arm{n_links}",
         observation_labels=("goal x", "goal y"),
         action_labels=ARM_ACTION_LABELS,
+        view="sweep" if n_links == 20 else "goals",
     )
 
 

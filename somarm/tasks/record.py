@@ -58,6 +58,10 @@ class TaskRecord:
     """Names of the observation dimensions, used as the run figures' axis labels."""
     action_labels: tuple[str, ...]
     """Axis labels of the first two (normalised) action dimensions in the run figures."""
+    view: str = "goals"
+    """How ``somarm view`` shows a trained learner: ``goals`` (one pose per goal, in turn),
+    ``sweep`` (every goal's posture at once, as Fig. 11) or ``fan`` (every action unit thrown at
+    once, as Fig. 16)."""
 
     def params_from(self, given: dict[str, Any]) -> Any:
         """The params of this task with ``given`` fields changed from their defaults.

@@ -274,6 +274,7 @@ def _record(name: str) -> TaskRecord:
         model="launcher",
         observation_labels=tuple(_LABELS[v] for v in varied) or (_LABELS["X"],),
         action_labels=_ACTION_LABELS,
+        view="fan" if name == "throw" else "goals",
     )
 
 
