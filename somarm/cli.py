@@ -16,7 +16,7 @@ _BENCHMARKS = ("learner", "tasks", "viewer")
 class _Parser(argparse.ArgumentParser):
     """argparse that reports a usage error in one line (``somarm: error: ...``)."""
 
-    def error(self, message: str):  # noqa: D401 - argparse's signature
+    def error(self, message: str):  # argparse's signature
         raise ValueError(message)
 
 
