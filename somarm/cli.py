@@ -57,7 +57,7 @@ def _cmd_train(args) -> int:
     from somarm.stopping import sigterm_as_interrupt
 
     config = run.from_options(args)
-    run.make(config)  # fail fast on a bad preset, --set or --task-set before any output
+    group = run.RunGroup([config])  # built once: a bad preset, --set or --task-set fails before any output
     out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
     sigterm_as_interrupt()
     hook = None
@@ -74,7 +74,7 @@ def _cmd_train(args) -> int:
         print(f"viewer: {view.url}", flush=True)
         hook = view.update
     try:
-        result = run.train(config, progress=not args.no_progress, on_step=hook)
+        result = group.train(progress=not args.no_progress, on_step=hook)[0]
     finally:
         if view is not None:
             view.close()

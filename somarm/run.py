@@ -36,6 +36,7 @@ __all__ = [
     "make",
     "train",
     "train_group",
+    "RunGroup",
     "greedy_summary",
     "summary",
     "write",
@@ -137,36 +138,58 @@ def train_group(configs: list[RunConfig], *, progress: bool = True, on_step: Ste
     Returns:
       One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays.
     """
-    configs = [c.resolved() for c in configs]
-    shared = {
-        (c.task, json.dumps(c.task_params, sort_keys=True), c.backend, c.seed, c.n_steps, c.block)
-        for c in configs
-    }
-    if len(shared) != 1:
-        raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
-    first = configs[0]
-    task = make_task(first, np.concatenate([c.trial_ids_array() for c in configs]))
-    learners = [make_learner(c, task) for c in configs]
-    bounds = np.cumsum([0] + [c.n_trials for c in configs])
-    parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-    curves = loop(task, learners, parts, n_steps=first.n_steps, block=first.block, progress=progress,
-                  on_step=on_step, label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at)
-    results = []
-    for config, learner, part, taken in zip(configs, learners, parts, curves.snapshots, strict=True):
-        own_task = task if len(configs) == 1 else make_task(config)
-        own_task.set_step(curves.steps_done)  # its phase (four_goals) is the one the learner reached
-        results.append(RunResult(
-            config=config,
-            learner=learner,
-            task=own_task,
-            block_means=curves.block_means[:, part].copy(),
-            block_sq_means=curves.block_sq_means[:, part].copy(),
-            steps_done=curves.steps_done,
-            wall_time=curves.wall_time,
-            interrupted=curves.interrupted,
-            snapshots=taken,
-        ))
-    return results
+    return RunGroup(configs).train(progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)
+
+
+class RunGroup:
+    """Configs that share a task, resolved and built once: one task for all trials, one learner each.
+
+    Building is where a bad preset, ``--set`` or ``--task-set`` fails, so a caller can build
+    first (fail fast), then prepare its output, then ``train`` what it built.
+
+    Raises:
+      ValueError: a bad setting, or configs that do not share task, task parameters, backend,
+        seed, steps and block.
+    """
+
+    def __init__(self, configs: list[RunConfig]) -> None:
+        self.configs = [c.resolved() for c in configs]
+        shared = {
+            (c.task, json.dumps(c.task_params, sort_keys=True), c.backend, c.seed, c.n_steps, c.block)
+            for c in self.configs
+        }
+        if len(shared) != 1:
+            raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
+        first = self.configs[0]
+        self.task = make_task(first, np.concatenate([c.trial_ids_array() for c in self.configs]))
+        self.learners = [make_learner(c, self.task) for c in self.configs]
+        bounds = np.cumsum([0] + [c.n_trials for c in self.configs])
+        self.parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+    def train(self, *, progress: bool = True, on_step: StepHook | None = None, label: str | None = None,
+              snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
+        """Train the built learners once (see ``train_group``); one ``RunResult`` per config."""
+        first = self.configs[0]
+        curves = loop(self.task, self.learners, self.parts, n_steps=first.n_steps, block=first.block,
+                      progress=progress, on_step=on_step, label=label or f"{first.task}/{first.learner}",
+                      snapshots_at=snapshots_at)
+        results = []
+        for config, learner, part, taken in zip(self.configs, self.learners, self.parts, curves.snapshots,
+                                                strict=True):
+            own_task = self.task if len(self.configs) == 1 else make_task(config)
+            own_task.set_step(curves.steps_done)  # its phase (four_goals) is the one the learner reached
+            results.append(RunResult(
+                config=config,
+                learner=learner,
+                task=own_task,
+                block_means=curves.block_means[:, part].copy(),
+                block_sq_means=curves.block_sq_means[:, part].copy(),
+                steps_done=curves.steps_done,
+                wall_time=curves.wall_time,
+                interrupted=curves.interrupted,
+                snapshots=taken,
+            ))
+        return results
 
 
 # -- summary and folder -------------------------------------------------------------------------
