@@ -110,3 +110,18 @@ def test_parse_assignments():
 def test_load_run_names_missing_file(tmp_path):
     with pytest.raises(ValueError, match="config.json is missing"):
         run.load(tmp_path)
+
+
+def test_every_run_setting_is_a_train_option():
+    import argparse
+    import dataclasses
+
+    from somarm.run_config import add_options, from_options
+
+    parser = argparse.ArgumentParser()
+    add_options(parser)
+    args = parser.parse_args(["reach2", "--steps", "300", "--trial-ids", "4", "7", "--set", "alpha=0.5"])
+    config = from_options(args)
+    assert {f.name for f in dataclasses.fields(RunConfig)} <= set(vars(args))
+    assert (config.n_steps, config.n_trials, config.trial_ids, config.overrides) == (300, 2, [4, 7], {"alpha": "0.5"})
+    assert config.preset == "table1" and config.block == 100  # the task's record and the field default
