@@ -80,9 +80,8 @@ def _bounds(task) -> dict[str, np.ndarray]:
 
 def task_defaults(task: str) -> tuple[str, int]:
     """The task's default preset and run length (somarm's learners train that long in the report)."""
-    from somarm import training
-
-    return training.TASK_DEFAULTS[task]
+    record = tasks.record(task)
+    return record.preset, record.n_steps
 
 
 def _our_config(kind: str, task: str):

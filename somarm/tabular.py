@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from .io import atomic_save_npz
+from .learner_base import ConfigBase, override_config
 from .schedules import InverseDecay, Schedule
 from .streams import UniformStreams, trial_ids_for
 from .validation import check_bounds, check_int, check_number
@@ -43,7 +44,7 @@ MAX_TABLE_ENTRIES = 10_000_000
 
 
 @dataclass(frozen=True)
-class TabularConfig:
+class TabularConfig(ConfigBase):
     """Everything that defines a tabular learner; the defaults suit the 2-D tasks."""
 
     observation_bins: int = 16
@@ -71,21 +72,34 @@ class TabularConfig:
             check_number("alpha", self.alpha, minimum=0.0, maximum=1.0, strict_minimum=True)
         check_number("gamma", self.gamma, minimum=0.0, maximum=1.0)
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able form; ``from_dict`` gives back an equal config."""
-        return {**dataclasses.asdict(self), "epsilon": self.epsilon.to_dict()}
+    def with_overrides(self, overrides: dict[str, str]) -> TabularConfig:
+        """A copy with command-line ``key=value`` strings applied.
 
-    @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> TabularConfig:
-        """Inverse of ``to_dict``; ValueError naming an unknown field."""
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(d) - set(names))
-        if unknown:
-            raise ValueError(f"unknown TabularConfig fields {unknown}; allowed: {', '.join(names)}")
-        values = dict(d)
-        if isinstance(values.get("epsilon"), dict):
-            values["epsilon"] = Schedule.from_dict(values["epsilon"])
-        return cls(**values)
+        Keys: ``observation_bins``, ``action_bins`` (whole numbers), ``alpha`` (a number or
+        ``none``), ``gamma``, and ``epsilon``/``epsilon.scale``/``.floor``/``.decay`` or ``decay``
+        as for SOM-Q's schedules.
+
+        Raises:
+          ValueError: one line naming the bad key or value and listing the allowed keys.
+        """
+        changes: dict[str, Any] = {}
+        rest = {}
+        for key, text in overrides.items():
+            try:
+                if key in ("observation_bins", "action_bins"):
+                    changes[key] = int(str(text))
+                elif key == "alpha":
+                    changes[key] = None if str(text).lower() == "none" else float(str(text))
+                else:
+                    rest[key] = text
+            except ValueError:
+                raise ValueError(f"{key}={text}: {key} must be "
+                                 f"{'a number or none' if key == 'alpha' else 'a whole number'}") from None
+        config = override_config(self, rest) if rest else self
+        try:
+            return dataclasses.replace(config, **changes)
+        except ValueError as exc:
+            raise ValueError(f"{', '.join(f'{k}={overrides[k]}' for k in changes)}: {exc}") from None
 
     @classmethod
     def from_table(cls, table: Any) -> TabularConfig:
@@ -111,6 +125,7 @@ class TabularQ:
     """
 
     kind = "tabular"
+    config_class = TabularConfig
     _ARRAYS = ("q", "counts", "_cells", "_choices")
 
     def __init__(self, config: TabularConfig, *, observation_low, observation_high, action_low, action_high,
