@@ -35,9 +35,9 @@ class RunConfig:
     task: str = field(metadata=_option("task", "task name (see `somarm tasks`)"))
     """Registered task name (``somarm tasks`` lists them)."""
     learner: str = field(default="somq", metadata=_option(
-        "--learner", "learner kind: somq (the paper's model) or motoric (the Fig. 13 B baseline)",
+        "--learner", "learner kind: somq (the paper's model), motoric (the Fig. 13 B baseline) or tabular (a fixed grid)",
         metavar="KIND"))
-    """A kind of ``somarm.learners.KINDS``: ``somq`` (the paper's model) or ``motoric`` (Fig. 13 B)."""
+    """A kind of ``somarm.learners.KINDS``: ``somq`` (the paper's model), ``motoric`` (Fig. 13 B) or ``tabular``."""
     preset: str | None = field(default=None, metadata=_option(
         "--preset", "parameter table (see `somarm presets`); default: the task's", metavar="TABLE"))
     """Parameter table by name (``table1`` ...); None takes the task's default."""
