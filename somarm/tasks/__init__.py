@@ -20,9 +20,9 @@ __all__ = ["names", "describe", "params_type", "load", "make", "set_threads"]
 # name -> (one-line description, module of the task, params class name, allowed parameters)
 _TASKS: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "reach2": ("2-link arm reaches a goal on a circle (Fig. 5); obs goal (x, y), action 2 angles",
-               "reach", "ReachParams", ("centre_x", "centre_y", "radius")),
+               "reach", "ReachParams", ("centre_x", "centre_y", "radius", "dynamics", "settle_time")),
     "reach20": ("20-link arm reaches a goal on a circle (Fig. 11); obs goal (x, y), action 20 angles",
-                "reach", "ReachParams", ("centre_x", "centre_y", "radius")),
+                "reach", "ReachParams", ("centre_x", "centre_y", "radius", "dynamics", "settle_time")),
     "four_goals": ("2-link arm, obs in the unit square, one goal per quadrant, goals move (Fig. 12)",
                    "four_goals", "FourGoalsParams", ("switch_step", "goals_before", "goals_after")),
     "throw": ("throw at target X = 4, a single state (Table 3); action (ux, uy) in [0, 1]^2",
@@ -123,13 +123,15 @@ def load(name: str, *, seed: int = 0, **params: Any):
     from somarm.tasks import arms, four_goals, launcher, reach
 
     batched = make(name, seed=seed, **params)
+    n_sub_steps = 1
     if name in ("reach2", "reach20"):
         physics, task = arms.load_physics(batched.n_links), reach.ReachEnvTask(batched)
+        n_sub_steps = batched.settle_steps if batched.actuated else 1
     elif name == "four_goals":
         physics, task = arms.load_physics(2), four_goals.FourGoalsEnvTask(batched)
     else:
         physics, task = launcher.load_physics(batched.params), launcher.ThrowEnvTask(batched)
-    return control.Environment(physics, task, n_sub_steps=1)
+    return control.Environment(physics, task, n_sub_steps=n_sub_steps)
 
 
 def set_threads(n: int) -> None:
