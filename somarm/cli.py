@@ -117,6 +117,16 @@ def _cmd_train(args) -> int:
                 "greedy_sd_reward": float(greedy.std()),
                 "greedy_observations": 1000,
             }
+            if getattr(result.task, "episodic", False):  # whole greedy episodes, from the start poses
+                import numpy as np
+
+                episodes = evaluation.greedy_episodes(result.learner, result.task, seed=config.seed)
+                lengths = episodes["mean_length"][np.isfinite(episodes["mean_length"])]
+                extra.update({
+                    "greedy_success_rate": float(episodes["success_rate"].mean()),
+                    "greedy_mean_episode_length": float(lengths.mean()) if lengths.size else None,
+                    "greedy_episodes": 100,
+                })
         except ValueError as exc:
             extra = {"greedy_error": str(exc)}
             print(f"somarm: warning: greedy evaluation failed: {exc}", file=sys.stderr)

@@ -2,6 +2,8 @@
 
 Data flows one way each step: ``task.reset() -> observations -> learner.act -> actions ->
 task.step (physics) -> rewards -> learner.learn``. The runner holds both ends and passes arrays.
+A multi-step task (``task.episodic``) also hands the learner each trial's next observation and
+whether its episode ended at the goal; its ``reset()`` restarts only the finished episodes.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ TASK_DEFAULTS: dict[str, tuple[str, int]] = {
     "reach2": ("table1", 50_000),
     "reach20": ("table1", 50_000),
     "four_goals": ("table2", 40_000),
+    "reach2_obstacle": ("obstacle", 10_000),
     "throw": ("table4", 4_000),
     "throw_distance": ("table5", 10_000),
     "throw_wind": ("table7", 20_000),
@@ -323,6 +326,7 @@ def train_group(
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in configs]
     bar = Progress(first.n_steps, label=label or f"{first.task}/{first.learner}", enabled=progress)
     last_mean = float("nan")
+    episodic = bool(getattr(task, "episodic", False))  # multi-step episodes (reach2_obstacle)
     start = time.perf_counter()
     step = 0
     interrupted = False
@@ -334,7 +338,10 @@ def train_group(
                     actions[part] = learner.act(observations[part])
                 rewards = task.step(actions)
                 for learner, part in zip(learners, parts, strict=True):
-                    learner.learn(rewards[part])
+                    if episodic:  # the next state and whether the episode ended there
+                        learner.learn(rewards[part], task.next_observations[part], task.terminal[part])
+                    else:
+                        learner.learn(rewards[part])
                 accumulated += rewards
                 accumulated_sq += rewards * rewards
                 step += 1

@@ -1,4 +1,4 @@
-"""Registered tasks: the reaching arms and the projectile launcher of Smith (2002).
+"""Registered tasks: the reaching arms and the projectile launcher of Smith (2002), and a delayed-reward arm.
 
 Two interfaces to the same tasks:
 
@@ -35,6 +35,10 @@ _TASKS: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
                        "throw", "ThrowParams", ("M", "G", "punish_low", "tolerance")),
     "throw_mass": ("Table 6 D: X, W, Fr, mass M in [1, 2] observed; action (ux, uy)",
                    "throw", "ThrowParams", ("G", "punish_low", "tolerance")),
+    "reach2_obstacle": ("actuated 2-link arm steps around a wall to a goal (multi-step, delayed reward); "
+                        "obs 2 angles, action 2 target changes",
+                        "obstacle", "ObstacleParams",
+                        ("max_step", "control_interval", "tolerance", "step_limit", "start_spread")),
 }
 
 
@@ -94,7 +98,7 @@ def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend
     Raises:
       ValueError: unknown task, unknown parameter, parameter out of range, unknown backend.
     """
-    from somarm.tasks import four_goals, reach, throw
+    from somarm.tasks import four_goals, obstacle, reach, throw
 
     p = _params(name, params)
     kwargs = {"n_trials": n_trials, "seed": seed, "trial_ids": trial_ids, "backend": backend}
@@ -102,25 +106,31 @@ def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend
         return reach.Reach(p, n_links=int(name[5:]), **kwargs)
     if name == "four_goals":
         return four_goals.FourGoals(p, **kwargs)
+    if name == "reach2_obstacle":
+        return obstacle.Obstacle(p, **kwargs)
     return throw.Throw(p, name=name, **kwargs)
 
 
 def load(name: str, *, seed: int = 0, **params: Any):
-    """A dm_env environment (``dm_control.rl.control.Environment``) with one-step episodes.
+    """A dm_env environment (``dm_control.rl.control.Environment``).
+
+    Episodes are one step long, except ``reach2_obstacle``'s, which end at the goal (discount 0)
+    or at the step limit (discount 1).
 
     Args:
       name: a registered task. seed: the seed of the observations (as trial 0 of ``make``).
       **params: fields of the task's params dataclass.
 
     Returns:
-      A ``control.Environment``; ``reset()`` draws the observation, ``step(action)`` ends the episode.
+      A ``control.Environment``; ``reset()`` draws the observation (or start pose), ``step(action)``
+      ends a one-step episode.
 
     Raises:
       ValueError: as for ``make``; actions of the wrong shape, non-finite or out of bounds at ``step``.
     """
     from dm_control.rl import control
 
-    from somarm.tasks import arms, four_goals, launcher, reach
+    from somarm.tasks import arms, four_goals, launcher, obstacle, reach
 
     batched = make(name, seed=seed, **params)
     n_sub_steps = 1
@@ -129,6 +139,9 @@ def load(name: str, *, seed: int = 0, **params: Any):
         n_sub_steps = batched.settle_steps if batched.actuated else 1
     elif name == "four_goals":
         physics, task = arms.load_physics(2), four_goals.FourGoalsEnvTask(batched)
+    elif name == "reach2_obstacle":
+        physics, task = obstacle.load_physics(), obstacle.ObstacleEnvTask(batched)
+        n_sub_steps = batched.control_steps
     else:
         physics, task = launcher.load_physics(batched.params), launcher.ThrowEnvTask(batched)
     return control.Environment(physics, task, n_sub_steps=n_sub_steps)

@@ -54,7 +54,7 @@ class Servos:
         return float(self.model.opt.timestep)
 
     def run(self, qpos: np.ndarray, qvel: np.ndarray, targets: np.ndarray, n_steps: int, *,
-            path: bool = False) -> tuple[np.ndarray, np.ndarray] | np.ndarray:
+            path: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Hold ``targets`` for ``n_steps`` timesteps starting from ``(qpos, qvel)``.
 
         Args:
@@ -64,7 +64,8 @@ class Servos:
           path: return the joint angles after every timestep instead of the end state.
 
         Returns:
-          ``(qpos, qvel)`` at the end, ``(n, nq)`` each; or with ``path`` the angles ``(n, n_steps, nq)``.
+          ``(qpos, qvel)`` at the end, ``(n, nq)`` each; with ``path`` the angles after every timestep,
+          ``(n, n_steps, nq)``, and the velocities at the end.
         """
         qpos = np.asarray(qpos, dtype=np.float64).reshape(-1, self.nq)
         qvel = np.asarray(qvel, dtype=np.float64).reshape(-1, self.nq)
@@ -85,7 +86,7 @@ class Servos:
                 else:
                     out_q[lo:hi] = states[:, -1, 1:1 + self.nq]
                 out_v[lo:hi] = states[:, -1, 1 + self.nq:1 + 2 * self.nq]
-        return out_q if path else (out_q, out_v)
+        return out_q, out_v
 
 
 _local = threading.local()

@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 __all__ = ["MODEL_NAMES", "ARM20_LINK_LENGTH", "ACTUATION", "model_path", "arm_mjcf", "arm20_xml"]
 
 #: The MJCF models of this project (``models/NAME.xml``).
-MODEL_NAMES: tuple[str, ...] = ("arm2", "arm20", "launcher")
+MODEL_NAMES: tuple[str, ...] = ("arm2", "arm20", "arm2_obstacle", "launcher")
 
 #: This project's choice: 20 equal links of 0.05 (reach 1.0). With 0.04 (reach 0.8, as arm2) the top of the
 #: goal circle needs the arm 94% straight, and Table 1 ended 0.126 from the goals (0.072 with 0.05).
@@ -49,7 +49,7 @@ def model_path(name: str) -> Path:
     """Path of ``models/NAME.xml``: the source checkout first, else the installed ``somarm.models``.
 
     Args:
-      name: one of ``MODEL_NAMES`` ("arm2", "arm20", "launcher").
+      name: one of ``MODEL_NAMES`` ("arm2", "arm20", "arm2_obstacle", "launcher").
 
     Returns:
       The path of an existing XML file.

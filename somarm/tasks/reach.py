@@ -124,7 +124,7 @@ class Reach(OneStepTask):
         result = actuation.servos(f"arm{self.n_links}", threads).run(start, start, flat, self.settle_steps,
                                                                      path=path)
         if path:
-            return result.reshape(*actions.shape[:-1], self.settle_steps, self.n_links)
+            return result[0].reshape(*actions.shape[:-1], self.settle_steps, self.n_links)
         return result[0].reshape(actions.shape)
 
     def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
