@@ -49,7 +49,7 @@ TASK_DEFAULTS: dict[str, tuple[str, int]] = {
     "reach2": ("table1", 50_000),
     "reach20": ("table1", 50_000),
     "four_goals": ("table2", 40_000),
-    "reach2_obstacle": ("obstacle", 10_000),
+    "reach2_obstacle": ("obstacle", 20_000),
     "throw": ("table4", 4_000),
     "throw_distance": ("table5", 10_000),
     "throw_wind": ("table7", 20_000),

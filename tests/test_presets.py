@@ -23,7 +23,7 @@ def test_every_table_is_available_by_name_with_a_description():
 def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
     preset = presets.PRESETS["obstacle"]
     assert preset.task == "reach2_obstacle" and preset.config.gamma == 0.9
-    assert preset.config.input_shape == (10, 10) and preset.config.action_shape == (3, 3)
+    assert preset.config.input_shape == (12, 12) and preset.config.action_shape == (3, 3)
     assert presets.describe("obstacle").startswith("beyond the paper")
     assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
 

@@ -36,7 +36,7 @@ __all__ = ["ObstacleParams", "Obstacle", "ObstaclePhysics", "ObstacleEnvTask", "
 
 #: The rest pose the episodes start near: elbow out to the right, fingertip at (0.68, 0.62).
 REST_POSE = np.array([0.6565, 1.2635])
-#: The goal, mirror image of the start's fingertip behind the wall (the model's ``goal`` site).
+#: The goal, mirror image of the start's fingertip behind the wall (the model's ``goal`` geom).
 GOAL = np.array([0.32, 0.62])
 _LINKS = arms.LINK_LENGTHS[2]
 
@@ -48,7 +48,7 @@ class ObstacleParams:
     max_step: float = 0.4  #: largest change of each joint target per step (rad)
     control_interval: float = 0.3  #: seconds the servos track the targets per step (whole 0.01 s)
     tolerance: float = 0.06  #: the goal is reached when the fingertip is closer than this
-    step_limit: int = 40  #: steps after which an episode is cut off (truncated, not terminal)
+    step_limit: int = 20  #: steps after which an episode is cut off (truncated, not terminal)
     start_spread: float = 0.05  #: start angles are uniform within +- this of ``REST_POSE`` (rad)
 
     def __post_init__(self):
@@ -242,10 +242,11 @@ class Obstacle:
 
 
 class ObstaclePhysics(arms.ArmPhysics):
-    """dm_control physics of ``models/arm2_obstacle.xml``: the arm, the wall and the fixed goal site."""
+    """dm_control physics of ``models/arm2_obstacle.xml``: the arm, the wall and the fixed goal."""
 
     def goal(self) -> np.ndarray:
-        return self.named.data.site_xpos["goal", :2].copy()
+        """(x, y) of the goal marker (a fixed geom)."""
+        return self.named.data.geom_xpos["goal", :2].copy()
 
     def wall_penetration(self) -> float:
         """The deepest overlap of a link with the wall now (0 if they do not touch)."""

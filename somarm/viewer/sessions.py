@@ -18,11 +18,13 @@ from somarm.viewer.adapters import goal_adapter
 from somarm.viewer.client import CommandSink
 from somarm.viewer.overlays import animation_command
 
-__all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play"]
+__all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "motion_animation", "record", "play"]
 
 #: Frames of joint-space interpolation between two goals in the HTML animation.
 _FRAMES_BETWEEN_GOALS = 12
 _FRAMES_HOLDING_GOAL = 18
+#: Playback of MuJoCo trajectories: every second timestep of 0.01 s, at 50 frames a second (real time).
+_MOTION_STRIDE, _MOTION_FPS = 2, 50.0
 
 
 @dataclass
@@ -36,6 +38,9 @@ class Session:
       errors: ``(n_goals,)`` minus the task's reward for each (the distance missed).
       fan: ``(n_units, action_dim)`` every action unit of the shown trial (the throw fan), or None.
       show: the task's show (``shows.show_for_task``).
+      paths: per goal, the joint angles ``(n_frames, nq)`` MuJoCo moved the arm through (actuated
+        reach: from the start pose until the reward is read; reach2_obstacle: a whole greedy
+        episode), or None where the arm is set, not driven.
     """
 
     task_name: str
@@ -44,6 +49,7 @@ class Session:
     errors: np.ndarray
     fan: np.ndarray | None
     show: object
+    paths: list[np.ndarray] | None = None
 
 
 def greedy_answers(task, learner, observations: np.ndarray, *, trial: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -63,7 +69,7 @@ def _sweep_order(observations: np.ndarray) -> np.ndarray:
 
 
 def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int = 12, seed: int = 0,
-                 trial: int = 0) -> Session:
+                 trial: int = 0, task_set: dict[str, str] | None = None) -> Session:
     """Goals drawn from the task (the ``viewer`` random stream of ``seed``) and the learner's answers.
 
     Args:
@@ -72,6 +78,7 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
       n_goals: how many goals are cycled through (or swept, for reach20).
       seed: seed of the goals (and of the untrained learner).
       trial: which trial of the run's learner is shown.
+      task_set: task parameters changed over the run's (``--task-set``), e.g. ``{"dynamics": "actuated"}``.
 
     Raises:
       ValueError: the run is for another task, or ``trial`` is not one of its trials.
@@ -89,13 +96,20 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         task_params = {}
     if not 0 <= trial < learner.n_trials:
         raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
+    task_params = {**task_params, **training.task_kwargs(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
     if hasattr(task, "set_step"):
         task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
+    if getattr(task, "episodic", False):
+        return _episode_session(task_name, task, learner, observations, trial)
     observations = observations[_sweep_order(observations)]
     actions, errors = greedy_answers(task, learner, observations, trial=trial)
+    paths = None
+    if getattr(task, "actuated", False):  # from the start pose (all zeros) to where the reward is read
+        moving = task.reached_angles(actions, path=True)
+        paths = [np.vstack([np.zeros((1, task.n_links)), path]) for path in moving]
     fan = None
     if task_name == "throw" and hasattr(learner, "action_weights"):
         fan = np.asarray(learner.action_weights)[trial]
@@ -104,7 +118,49 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
                                goal_of=goal_adapter(task_name, task))
     else:
         show = shows.show_for_task(task_name, task)
-    return Session(task_name, observations, actions, errors, fan, show)
+    return Session(task_name, observations, actions, errors, fan, show, paths)
+
+
+def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: int) -> Session:
+    """Greedy episodes of a multi-step task from ``starts`` ``(n, obs_dim)``, with their MuJoCo paths."""
+    n = len(starts)
+
+    def policy(angles: np.ndarray) -> np.ndarray:
+        batch = np.broadcast_to(angles, (learner.n_trials, *angles.shape)).copy()
+        return np.asarray(learner.predict(batch))[trial]
+
+    episodes = task.run_episodes(policy, starts, paths=True)
+    ends = 1 + episodes["length"] * task.control_steps
+    paths = [episodes["path"][k, :ends[k]] for k in range(n)]
+    finals = np.array([path[-1] for path in paths])
+    errors = task.distances(finals)
+    return Session(task_name, starts, finals, errors, None, shows.show_for_task(task_name, task), paths)
+
+
+def motion_animation(show: shows.ArmShow, observations: np.ndarray, paths: list[np.ndarray]) -> dict:
+    """A looping animation of the arm along MuJoCo trajectories, one per observation, each end held.
+
+    Frame ``k`` of path ``i`` is the arm at ``paths[i][k * stride]`` (every second 0.01 s timestep, played
+    at 50 frames a second: real time); the last pose of each path is held before the next begins.
+    """
+    frames = []
+    for observation, path in zip(observations, paths, strict=True):
+        picked = list(path[::_MOTION_STRIDE])
+        if len(path) and (len(path) - 1) % _MOTION_STRIDE:
+            picked.append(path[-1])
+        for angles in picked:
+            frames.append(_pose_frame(show, observation, angles))
+        frames += [frames[-1]] * _FRAMES_HOLDING_GOAL
+    return animation_command(frames, fps=_MOTION_FPS)
+
+
+def _pose_frame(show: shows.ArmShow, observation: np.ndarray, angles: np.ndarray) -> list[dict]:
+    """The show's frame with the arm at ``angles``, whatever its ``pose_of`` would read."""
+    pose_of, show.pose_of = show.pose_of, None
+    try:
+        return show.frame(observation, angles)
+    finally:
+        show.pose_of = pose_of
 
 
 def arm_animation(show: shows.ArmShow, observations: np.ndarray, actions: np.ndarray) -> dict:
@@ -126,6 +182,10 @@ def record(session: Session, sink: CommandSink) -> None:
     if isinstance(show, shows.SweepShow):
         sink.send_batch(show.setup())
         sink.send_batch(show.frame(session.observations, session.actions))
+    elif isinstance(show, shows.ArmShow) and session.paths is not None:
+        sink.send_batch(show.setup())
+        sink.send_batch(_pose_frame(show, session.observations[0], session.paths[0][0]))
+        sink.send(motion_animation(show, session.observations, session.paths))
     elif isinstance(show, shows.ArmShow):
         sink.send_batch(show.setup())
         sink.send_batch(show.frame(session.observations[0], session.actions[0]))
@@ -141,7 +201,7 @@ def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: 
          log=print) -> None:
     """Stream a session to a live server, goal after goal, until Ctrl-C (or one pass if ``once``)."""
     show = session.show
-    if isinstance(show, shows.SweepShow) or (session.fan is not None):
+    if isinstance(show, shows.SweepShow) or session.fan is not None or session.paths is not None:
         record(session, sink)
         log(f"{session.task_name}: {len(session.observations)} goals, mean error {session.errors.mean():.4f}")
         while not once:

@@ -24,6 +24,7 @@ MODEL_OF_TASK: dict[str, str] = {
     "reach2": "arm2",
     "four_goals": "arm2",
     "reach20": "arm20",
+    "reach2_obstacle": "arm2_obstacle",
     "throw": "launcher",
     "throw_distance": "launcher",
     "throw_wind": "launcher",
@@ -34,7 +35,7 @@ _TIP_COLOR, _ERROR_COLOR, _INPUT_COLOR = 0xFFD21F, 0xE0301E, 0x3050C0
 
 
 def load_model(name: str) -> mujoco.MjModel:
-    """The compiled MJCF model ``name`` (``arm2``, ``arm20``, ``launcher``) from the tasks' assets."""
+    """The compiled MJCF model ``name`` (``arm2``, ``arm20``, ``arm2_obstacle``, ``launcher``) from the tasks' assets."""
     from somarm.tasks import assets  # the tasks own where models live
 
     return mujoco.MjModel.from_xml_path(str(assets.model_path(name)))
@@ -59,6 +60,8 @@ class ArmShow:
       goal_of: maps an observation ``(obs_dim,)`` to the goal's (x, y); default: its first two
         values. When given (four_goals), the observation itself is drawn too, as a blue dot.
       prefix: meshcat path of the drawing.
+      pose_of: maps ``(observation, action)`` to the joint angles drawn; default: the action (the
+        reach tasks' setpoint). reach2_obstacle observes the angles and acts by changing targets.
     """
 
     def __init__(
@@ -67,8 +70,10 @@ class ArmShow:
         *,
         goal_of: Callable[[np.ndarray], np.ndarray] | None = None,
         prefix: str = "/meshcat/arm",
+        pose_of: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     ) -> None:
         self.model = model
+        self.pose_of = pose_of
         self.scene = MujocoScene(model, prefix=prefix)
         self.prefix = path_of(prefix)
         self.shows_input = goal_of is not None
@@ -94,6 +99,12 @@ class ArmShow:
         commands += overlays.camera_commands(center, _plane_view(self.model), 0.95 * self.size)
         return commands
 
+    def with_goal(self, goal: np.ndarray) -> ArmShow:
+        """The same show with a fixed goal (x, y) instead of one read from each observation."""
+        fixed = np.asarray(goal, dtype=np.float64)[:2].copy()
+        self.goal_of = lambda observation: fixed
+        return self
+
     def qpos_of(self, action: np.ndarray) -> np.ndarray:
         """Joint angles of an action, inside the joints' ranges."""
         action = np.asarray(action, dtype=np.float64)
@@ -108,7 +119,8 @@ class ArmShow:
         goal = np.zeros(3)
         goal[:2] = self.goal_of(observation)
         mocap = np.tile(goal, (self.model.nmocap, 1)) if self.model.nmocap else None
-        commands = self.scene.pose_commands(self.qpos_of(action), mocap_pos=mocap)
+        pose = action if self.pose_of is None else self.pose_of(observation, action)
+        commands = self.scene.pose_commands(self.qpos_of(pose), mocap_pos=mocap)
         tip = self.scene.data.site_xpos[self.tip_site].copy()  # current: pose_commands ran mj_kinematics
         self.last_error = float(np.linalg.norm(tip[:2] - goal[:2]))
         commands.append(SetTransform(overlays.translation(tip), self.prefix.append("fingertip")).lower())
@@ -281,6 +293,11 @@ def show_for_task(task_name: str, task=None):
     if task_name not in MODEL_OF_TASK:
         raise ValueError(f"unknown task {task_name!r}; allowed: {', '.join(MODEL_OF_TASK)}")
     model = load_model(MODEL_OF_TASK[task_name])
+    if task_name == "reach2_obstacle":  # the arm where it is (the observation), the fixed goal
+        from somarm.tasks.obstacle import GOAL
+
+        return ArmShow(model, prefix=f"/meshcat/{task_name}", goal_of=None,
+                       pose_of=lambda observation, action: np.asarray(observation)[:2]).with_goal(GOAL)
     if MODEL_OF_TASK[task_name] != "launcher":
         return ArmShow(model, goal_of=goal_adapter(task_name, task), prefix=f"/meshcat/{task_name}")
     trajectory_of, target_of = throw_adapters(task_name, task)
