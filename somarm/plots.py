@@ -173,6 +173,8 @@ AXIS_LABELS: dict[str, tuple[tuple[str, ...], tuple[str, str]]] = {
     "throw_wind": (("target X", "wind W"), _THROW_ACTIONS),
     "throw_friction": (("target X", "wind W"), _THROW_ACTIONS),
     "throw_mass": (("target X", "wind W"), _THROW_ACTIONS),
+    "reach2_obstacle": (("theta1 (rad)", "theta2 (rad)"), ("change of theta1's target (normalised)",
+                                                           "change of theta2's target (normalised)")),
 }
 
 
