@@ -6,7 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from somarm import tasks, training
+from somarm import run as runs
+from somarm import tasks
 from somarm.protocols import BatchedTask
 from somarm.tasks import assets, obstacle, obstacle_search
 
@@ -128,10 +129,10 @@ def test_dm_env_episode_equals_trial_0_of_the_batch():
 
 
 def test_training_hands_the_learner_next_observations_and_terminal_flags():
-    config = training.RunConfig(task="reach2_obstacle", preset="obstacle", n_steps=60, n_trials=2, block=20,
+    config = runs.RunConfig(task="reach2_obstacle", preset="obstacle", n_steps=60, n_trials=2, block=20,
                                 task_params={"step_limit": "10"})
-    discounted = training.train(config, progress=False)
-    myopic = training.train(training.RunConfig(**{**config.to_dict(), "overrides": {"gamma": "0"}}),
+    discounted = runs.train(config, progress=False)
+    myopic = runs.train(runs.RunConfig(**{**config.to_dict(), "overrides": {"gamma": "0"}}),
                             progress=False)
     # Same observations, actions and rewards up to the first learning step; with gamma > 0 the
     # Q-values also hold the next state's value, so they differ.

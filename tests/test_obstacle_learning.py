@@ -5,14 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from somarm import evaluation, training
+from somarm import evaluation
+from somarm import run as runs
 from somarm.tasks import obstacle_search
 
 
 def _greedy(gamma: str) -> dict[str, np.ndarray]:
-    config = training.RunConfig(task="reach2_obstacle", n_trials=2, n_steps=12_000, seed=0,
+    config = runs.RunConfig(task="reach2_obstacle", n_trials=2, n_steps=12_000, seed=0,
                                 overrides={"gamma": gamma})
-    result = training.train(config, progress=False)
+    result = runs.train(config, progress=False)
     return evaluation.greedy_episodes(result.learner, result.task, n_episodes=50, seed=0)
 
 

@@ -7,8 +7,8 @@ import numpy as np
 from somarm import evaluation
 from somarm.reproduce.common import Context, fmt, preset_choices, run_group
 from somarm.reproduce.report import Claim, Section
+from somarm.run import RunConfig
 from somarm.tasks import obstacle, obstacle_search
-from somarm.training import RunConfig
 
 __all__ = ["delayed_reward"]
 

@@ -30,8 +30,9 @@ from dm_env import specs
 from somarm.streams import trial_generators, trial_ids_for
 from somarm.tasks import actuation, arms
 from somarm.tasks.base import check_actions
+from somarm.tasks.record import TaskRecord
 
-__all__ = ["ObstacleParams", "Obstacle", "ObstaclePhysics", "ObstacleEnvTask", "REST_POSE", "GOAL",
+__all__ = ["ObstacleParams", "Obstacle", "ObstaclePhysics", "ObstacleEnvTask", "RECORDS", "REST_POSE", "GOAL",
            "fingertips", "moves", "load_physics"]
 
 #: The rest pose the episodes start near: elbow out to the right, fingertip at (0.68, 0.62).
@@ -89,6 +90,7 @@ class Obstacle:
 
     name = "reach2_obstacle"
     episodic = True  #: episodes last several steps: ``step`` sets ``next_observations``/``terminal``
+    goal = GOAL  #: where the fingertip must go, (x, y)
 
     def __init__(self, params: ObstacleParams, *, n_trials: int = 1, seed: int = 0,
                  trial_ids: np.ndarray | None = None, backend: str = "mujoco"):
@@ -113,6 +115,10 @@ class Obstacle:
 
     def __repr__(self) -> str:
         return f"Obstacle({self.params!r}, n_trials={self.n_trials})"
+
+    def set_step(self, step: int) -> None:
+        """Move the step counter to ``step`` (nothing of this task depends on it)."""
+        self.t = int(step)
 
     @property
     def observation_dim(self) -> int:
@@ -273,6 +279,7 @@ class ObstacleEnvTask(base.Task):
         super().__init__(random=int(batched.seed))  # unused: draws come from the task's own streams
         self.batched = batched
         self._steps = 0
+        self.sub_steps = batched.control_steps  #: timesteps per dm_env step (``tasks.load`` reads it)
 
     def initialize_episode(self, physics: ObstaclePhysics) -> None:
         self.batched._over[:] = True  # a new episode whatever state the batch was left in
@@ -313,3 +320,21 @@ class ObstacleEnvTask(base.Task):
         if self._steps >= self.batched.params.step_limit:
             return 1.0  # the step limit: truncated, the future still counts
         return None
+
+
+RECORDS = (
+    TaskRecord(
+        name="reach2_obstacle",
+        summary="actuated 2-link arm steps around a wall to a goal (multi-step, delayed reward); "
+                "obs 2 angles, action 2 target changes",
+        params=ObstacleParams,
+        settable=("max_step", "control_interval", "tolerance", "step_limit", "start_spread"),
+        make=lambda params, **kwargs: Obstacle(params, **kwargs),
+        environment=lambda batched: (load_physics(), ObstacleEnvTask(batched)),
+        preset="obstacle",
+        n_steps=20_000,
+        model="arm2_obstacle",
+        observation_labels=("theta1 (rad)", "theta2 (rad)"),
+        action_labels=("change of theta1's target (normalised)", "change of theta2's target (normalised)"),
+    ),
+)
