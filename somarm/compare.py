@@ -109,6 +109,10 @@ def check(config: CompareConfig) -> list[str]:
     unknown = [k for k in config.learners if k not in LEARNERS]
     if unknown or not config.learners:
         raise ValueError(f"unknown learner(s) {', '.join(unknown) or '(none given)'}; allowed: {', '.join(LEARNERS)}")
+    if tasks.record(config.task).episodic:
+        one_step = [name for name in tasks.names() if not tasks.record(name).episodic]
+        raise ValueError(f"{config.task} has multi-step episodes; compare takes the one-step tasks: "
+                         f"{', '.join(one_step)}")
     task = tasks.make(config.task, **config.task_params)
     for kind in config.learners:
         if kind in OURS:

@@ -1,6 +1,6 @@
 """Gymnasium environments for the registered one-step tasks: ``somarm/Reach2-v0`` and the rest.
 
-``import somarm.gym`` registers one id per task (``env_id("throw_distance")`` is
+``import somarm.gym`` registers one id per one-step task (``env_id("throw_distance")`` is
 ``"somarm/ThrowDistance-v0"``), so ``gymnasium.make("somarm/Reach2-v0")`` builds it. Every
 episode is one step long: ``reset`` draws the observation, ``step`` throws or reaches and the
 episode terminates.
@@ -29,7 +29,7 @@ from gymnasium import spaces
 
 from somarm import tasks
 
-__all__ = ["OneStepEnv", "env_id", "register", "spaces_for", "to_task_actions"]
+__all__ = ["OneStepEnv", "env_id", "one_step_tasks", "register", "spaces_for", "to_task_actions"]
 
 
 def env_id(task: str) -> str:
@@ -85,6 +85,9 @@ class OneStepEnv(gymnasium.Env):
     metadata: dict[str, Any] = {"render_modes": []}
 
     def __init__(self, task: str = "reach2", *, backend: str = "mujoco", **params: Any):
+        if tasks.record(task).episodic:
+            raise ValueError(f"{task} has multi-step episodes; somarm.gym adapts the one-step tasks: "
+                             f"{', '.join(one_step_tasks())}")
         self.task_name = task
         self._make_kwargs = {"backend": backend, **params}
         self.task = tasks.make(task, seed=0, **self._make_kwargs)
@@ -123,9 +126,14 @@ class OneStepEnv(gymnasium.Env):
         return observation.astype(np.float32), reward, True, False, {}
 
 
+def one_step_tasks() -> list[str]:
+    """The registered tasks whose episodes are one step long (the ones adapted here)."""
+    return [name for name, record in tasks.records().items() if not record.episodic]
+
+
 def register() -> None:
-    """Register ``somarm/<Name>-v0`` for every task (done on import; calling again is harmless)."""
-    for name in tasks.names():
+    """Register ``somarm/<Name>-v0`` for every one-step task (done on import; again is harmless)."""
+    for name in one_step_tasks():
         if env_id(name) not in gymnasium.registry:
             gymnasium.register(env_id(name), entry_point=OneStepEnv, kwargs={"task": name})
 

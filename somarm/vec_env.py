@@ -45,6 +45,8 @@ class BatchedVecEnv(VecEnv):
     render_mode = None  #: nothing renders here; the meshcat viewer is ``somarm view``
 
     def __init__(self, task: str, n_envs: int = 1, *, seed: int = 0, backend: str = "mujoco", **params: Any):
+        if tasks.record(task).episodic:
+            raise ValueError(f"{task} has multi-step episodes; BatchedVecEnv steps one-step tasks")
         self.task_name = task
         self._make_kwargs = {"n_trials": check_int("n_envs", n_envs), "backend": backend, **params}
         self.task = tasks.make(task, seed=seed, **self._make_kwargs)

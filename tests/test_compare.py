@@ -57,6 +57,7 @@ def test_the_same_seed_gives_the_same_errors_for_somarm_learners(tmp_path):
     (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, motoric, tabular, td3, sac"),
     (["reach20", "--learners", "tabular"], "tabular cannot learn reach20"),
     (["reach3"], "unknown task 'reach3'"),
+    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes the one-step tasks"),
     (["reach2", "--seeds", "0"], "seeds must be a whole number >= 1"),
 ])
 def test_bad_compare_arguments_end_in_one_line(argv, message, capsys, tmp_path):

@@ -27,8 +27,11 @@ IDS = {"reach2": "somarm/Reach2-v0", "reach20": "somarm/Reach20-v0", "four_goals
        "throw_mass": "somarm/ThrowMass-v0"}
 
 
-def test_every_task_is_registered_under_its_id():
-    assert set(IDS) == set(tasks.names())
+def test_every_one_step_task_is_registered_under_its_id():
+    from somarm.gym import one_step_tasks
+
+    assert set(IDS) == set(one_step_tasks()) == {n for n in tasks.names() if not tasks.record(n).episodic}
+    assert "somarm/Reach2Obstacle-v0" not in gymnasium.registry
     for name, gym_id in IDS.items():
         assert env_id(name) == gym_id
         env = gymnasium.make(gym_id)
@@ -101,6 +104,8 @@ def test_actions_outside_the_space_or_a_step_without_reset_are_clear_errors():
         env.step(np.array([np.nan, 0.0], np.float32))
     with pytest.raises(ValueError, match="unknown task"):
         OneStepEnv("reach3")
+    with pytest.raises(ValueError, match="reach2_obstacle has multi-step episodes"):
+        OneStepEnv("reach2_obstacle")
 
 
 def test_the_vec_env_steps_all_trials_in_one_batch_with_the_tasks_rewards():
