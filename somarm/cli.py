@@ -1,4 +1,4 @@
-"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view."""
+"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view, sweep."""
 
 from __future__ import annotations
 
@@ -214,6 +214,7 @@ def _parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer (pass --help after the name)")
     bench.add_argument("name", choices=_BENCHMARKS)
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
+    sub.add_parser("sweep", help="parameter sweeps over seeds (pass --help after `sweep`)")
     return parser
 
 
@@ -227,6 +228,8 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_forward(f"somarm.benchmarks.{argv[1]}", argv[2:])
         if argv[:1] == ["view"]:
             return _cmd_forward("somarm.viewer.cli", argv[1:])
+        if argv[:1] == ["sweep"]:
+            return _cmd_forward("somarm.sweep.cli", argv[1:])
         args = _parser().parse_args(argv)
         return args.func(args)
     except ValueError as exc:
