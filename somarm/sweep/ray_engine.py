@@ -17,7 +17,7 @@ from pathlib import Path
 import somarm
 from somarm.sweep.work import Chunk, failed_row, run_chunk
 
-__all__ = ["run_ray", "experiment_name"]
+__all__ = ["run_ray", "experiment_name", "start_local"]
 
 
 def _trainable(config: dict) -> None:
@@ -30,6 +30,12 @@ def _trainable(config: dict) -> None:
     failed = [row["error"] for row in rows if row.get("error")]
     if failed:
         raise RuntimeError(f"{len(failed)} point(s) failed, the first with {failed[0]}")
+
+
+def _trial_name(trial) -> str:
+    """A short trial name (Tune's default spells out the whole chunk)."""
+    first = trial.config["chunk"]["items"][0]
+    return f"chunk_{trial.trial_id}_seed{first[1]}_{len(trial.config['chunk']['items'])}points"
 
 
 def experiment_name(keys: list[str]) -> str:
@@ -45,13 +51,26 @@ def _start(address: str | None, workers: int | None) -> bool:
         return False
     if address:
         ray.init(address=address, log_to_driver=False)
-        return True
-    # The workers run in trial folders, so the folder that holds this somarm must be on their path.
+    else:
+        start_local(workers or os.cpu_count() or 1)
+    return True
+
+
+def start_local(workers: int, **init_kwargs) -> None:
+    """Start a local Ray cluster of ``workers`` CPUs whose workers import this very somarm.
+
+    Args:
+      workers: CPUs the cluster offers (trials at once).
+      **init_kwargs: passed on to ``ray.init`` (e.g. ``_temp_dir``).
+    """
+    import ray
+
+    # Tune runs each trial in its own folder, so a relative PYTHONPATH (or none, when somarm is used
+    # from a checkout) would not find somarm there: give the workers absolute paths.
     package_root = str(Path(somarm.__file__).resolve().parents[1])
     paths = [package_root] + [os.path.abspath(p) for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
-    ray.init(num_cpus=workers or os.cpu_count(), include_dashboard=False, log_to_driver=False,
-             runtime_env={"env_vars": {"PYTHONPATH": os.pathsep.join(dict.fromkeys(paths))}})
-    return True
+    ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False,
+             runtime_env={"env_vars": {"PYTHONPATH": os.pathsep.join(dict.fromkeys(paths))}}, **init_kwargs)
 
 
 def run_ray(
@@ -91,7 +110,10 @@ def run_ray(
             tuner = tune.Tuner(
                 trainable,
                 param_space={"chunk": tune.grid_search([chunk.to_dict() for chunk in chunks])},
-                tune_config=tune.TuneConfig(reuse_actors=True, max_concurrent_trials=workers),
+                tune_config=tune.TuneConfig(
+                    reuse_actors=True, max_concurrent_trials=workers,
+                    trial_name_creator=_trial_name, trial_dirname_creator=_trial_name,
+                ),
                 run_config=tune.RunConfig(
                     storage_path=str(storage),
                     name=name,

@@ -136,10 +136,10 @@ class SweepSpec:
         if not self.axes:
             raise ValueError("nothing to sweep: give --grid KEY=V1,V2,... or --random KEY=LOW:HIGH")
         has_random = any(a.is_random for a in self.axes)
-        check_int("samples", self.n_samples, minimum=1 if has_random else 0)
+        check_int("--samples", self.n_samples, minimum=1 if has_random else 0)
         if self.n_samples and not has_random:
             raise ValueError("--samples needs a --random axis")
-        check_int("seeds", self.n_seeds)
+        check_int("--seeds", self.n_seeds)
         base = self.base_config(0).resolved()
         return dataclasses.replace(self, preset=base.preset, n_steps=base.n_steps)
 

@@ -185,6 +185,8 @@ def write_outputs(out: Path, table: Table, *, figure: bool = True) -> str:
             "command": shlex.join(argv),
             "summary": line,
         })
+    else:  # a best.json left from an earlier, narrower sweep would no longer be true
+        (out / "best.json").unlink(missing_ok=True)
     if figure and table.rows:
         from somarm.sweep import figure as sweep_figure
 
