@@ -158,3 +158,12 @@ def test_a_failing_point_is_recorded_with_its_error_and_the_others_finish(tmp_pa
     monkeypatch.setattr(training, "build_learner", real)
     again = run_sweep(spec, out, progress=False, figure=False)
     assert again.n_run == 1 and not read_csv(out / "results.csv")[1]["error"]  # the failed point is retried
+
+
+def test_importing_the_sweep_package_loads_neither_ray_nor_matplotlib():
+    import subprocess
+    import sys
+
+    code = "import sys, somarm.sweep; print(sorted({'ray', 'matplotlib'} & set(sys.modules)))"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"

@@ -29,7 +29,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="a task parameter fixed for all")
     p.add_argument("--trials", type=int, default=5, help="trials per point and seed (default 5)")
     p.add_argument("--steps", type=int, help="training steps (default: the task's)")
-    p.add_argument("--seeds", type=int, default=1, help="seeds 0..K-1, one row each (default 1)")
+    p.add_argument("--seed", type=int, default=0, help="the first seed (default 0)")
+    p.add_argument("--seeds", type=int, default=1, help="seeds S..S+K-1, one row each (default 1)")
     p.add_argument("--backend", default="mujoco", help="mujoco (default) or analytic")
     p.add_argument("--block", type=int, default=100, help="steps per learning-curve block (default 100)")
     p.add_argument("--out", help="sweep folder (default sweeps/TASK); a rerun finishes what is missing")
@@ -58,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
         n_samples=args.samples, sample_seed=args.sample_seed,
         overrides=parse_assignments(args.set, "--set"),
         task_params=parse_assignments(args.task_set, "--task-set"),
-        n_trials=args.trials, n_steps=args.steps, n_seeds=args.seeds, backend=args.backend, block=args.block,
+        n_trials=args.trials, n_steps=args.steps, seed=args.seed, n_seeds=args.seeds, backend=args.backend, block=args.block,
     )
     out = args.out or f"sweeps/{args.task}"
     outcome = run_sweep(spec, out, engine=args.engine, workers=args.workers, address=args.address,

@@ -65,7 +65,7 @@ def run_sweep(
     except OSError as exc:
         raise ValueError(f"cannot create sweep folder {out}: {exc.strerror or exc}") from None
     atomic_write_json(out / "sweep.json", {**spec.to_dict(), "points": points})
-    items = [(i, seed, spec.config(p, seed)) for i, p in enumerate(points) for seed in range(spec.n_seeds)]
+    items = [(i, seed, spec.config(p, seed)) for i, p in enumerate(points) for seed in spec.seeds()]
     done = store.load_rows(out)
     # A failed row is retried on a rerun (the failure may have been the machine's, not the point's).
     todo = [item for item in items if done.get(config_key(item[2]), {"error": "missing"}).get("error")]

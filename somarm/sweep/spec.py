@@ -117,8 +117,10 @@ class SweepSpec:
     """Task parameters fixed for every point (``--task-set``)."""
     n_trials: int = 5
     n_steps: int | None = None
+    seed: int = 0
+    """The first seed."""
     n_seeds: int = 1
-    """Seeds ``0 .. n_seeds-1``: each an independent set of trials, one result row per point and seed."""
+    """Seeds ``seed .. seed+n_seeds-1``: each an independent set of trials, one row per point and seed."""
     backend: str = "mujoco"
     block: int = 100
     sample_seed: int = 0
@@ -140,8 +142,21 @@ class SweepSpec:
         if self.n_samples and not has_random:
             raise ValueError("--samples needs a --random axis")
         check_int("--seeds", self.n_seeds)
-        base = self.base_config(0).resolved()
+        base = self.base_config(self.seed).resolved()
         return dataclasses.replace(self, preset=base.preset, n_steps=base.n_steps)
+
+    def seeds(self) -> range:
+        """The run seeds of every point."""
+        return range(self.seed, self.seed + self.n_seeds)
+
+    @classmethod
+    def around(cls, base: RunConfig, axes: tuple[Axis, ...], *, n_seeds: int = 1, n_samples: int = 0,
+               sample_seed: int = 0) -> SweepSpec:
+        """The sweep of ``axes`` around a run configuration (its seed is the first seed)."""
+        return cls(task=base.task, learner=base.learner, preset=base.preset, axes=axes, n_samples=n_samples,
+                   overrides=dict(base.overrides), task_params=dict(base.task_params), n_trials=base.n_trials,
+                   n_steps=base.n_steps, seed=base.seed, n_seeds=n_seeds, backend=base.backend,
+                   block=base.block, sample_seed=sample_seed)
 
     def base_config(self, seed: int) -> RunConfig:
         return RunConfig(

@@ -61,7 +61,7 @@ class Table:
         self.rows = []
         self.missing = 0
         for index, point in enumerate(points):
-            for seed in range(spec.n_seeds):
+            for seed in spec.seeds():
                 row = rows.get(config_key(spec.config(point, seed)))
                 if row is None:
                     self.missing += 1
@@ -125,7 +125,7 @@ def _train_command(spec: SweepSpec, values: dict[str, str]) -> list[str]:
         argv += ["--set", f"{key}={value}"]
     for key, value in task.items():
         argv += ["--task-set", f"{key}={value}"]
-    argv += ["--trials", str(spec.n_trials), "--steps", str(spec.n_steps)]
+    argv += ["--trials", str(spec.n_trials), "--steps", str(spec.n_steps), "--seed", str(spec.seed)]
     if spec.backend != "mujoco":
         argv += ["--backend", spec.backend]
     if spec.block != 100:

@@ -56,7 +56,7 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
     tasks_checked: set[str] = set()
     for point in points:
         try:
-            config = spec.config(point, 0)
+            config = spec.config(point, spec.seed)
             presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
             task_key = json.dumps(config.task_params, sort_keys=True)
             if task_key not in tasks_checked:
