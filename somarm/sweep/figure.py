@@ -74,7 +74,7 @@ def draw(table, path: Path) -> Path:
     for ax in axes[0]:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(label, handle)
-    fig.legend(handles.values(), handles.keys(), fontsize=7, loc="upper center", ncol=len(handles),
+    fig.legend(handles.values(), handles.keys(), fontsize=7, loc="upper center", ncol=len(handles) if len(keys) > 1 else 2,
                bbox_to_anchor=(0.5, -0.02), frameon=False)
     spec = table.spec
     fig.tight_layout()

@@ -161,7 +161,7 @@ def summary_line(table: Table) -> str:
     own_point = table.preset_point()
     if own_point is None:
         text += " (not swept)"
-    elif own_point is best:
+    elif own_point["point"] == best["point"]:
         text += " (the best)"
     else:
         change = best["greedy_error"] / own_point["greedy_error"] - 1.0 if own_point["greedy_error"] else math.nan
