@@ -7,7 +7,7 @@ import signal
 import numpy as np
 import pytest
 
-from somarm import cli, training
+from somarm import cli, run
 from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
 from somarm.sweep.spec import preset_value
 from somarm.sweep.work import plan_chunks
@@ -43,6 +43,7 @@ def read_csv(path):
         ["--grid", "alpha=0.5,1", "--seeds", "0"],
         ["--grid", "alpha=0.5,1", "--engine", "dask"],
         ["--grid", "alpha=0.5,1", "--address", "127.0.0.1:6379"],
+        ["--grid", "alpha=0.5,1", "--trial-ids", "3"],
         [],
     ],
 )
@@ -108,7 +109,7 @@ def test_a_local_sweep_equals_separate_runs_bit_for_bit(tmp_path, capsys):
 def test_an_interrupted_sweep_keeps_its_rows_and_a_rerun_finishes_only_the_rest(tmp_path, monkeypatch):
     spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,1"),), n_trials=2, n_steps=200, block=50,
                      n_seeds=3)
-    real = training.train_group
+    real = run.train_group
     calls = []
 
     def ctrl_c_in_second_group(configs, **kwargs):
@@ -120,7 +121,7 @@ def test_an_interrupted_sweep_keeps_its_rows_and_a_rerun_finishes_only_the_rest(
 
         return real(configs, **{**kwargs, "on_step": hook})
 
-    monkeypatch.setattr(training, "train_group", ctrl_c_in_second_group)
+    monkeypatch.setattr(run, "train_group", ctrl_c_in_second_group)
     out = tmp_path / "sweep"
     first = run_sweep(spec, out, progress=False, figure=False)
     assert first.interrupted and calls == [2, 2]
@@ -139,14 +140,14 @@ def test_an_interrupted_sweep_keeps_its_rows_and_a_rerun_finishes_only_the_rest(
 
 def test_a_failing_point_is_recorded_with_its_error_and_the_others_finish(tmp_path, monkeypatch):
     spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,0.7,1"),), n_trials=2, n_steps=200, block=50)
-    real = training.build_learner
+    real = run.make_learner
 
     def broken_for_alpha_07(config, task):
         if config.overrides.get("alpha") == "0.7":
             raise FloatingPointError("the learner diverged")
         return real(config, task)
 
-    monkeypatch.setattr(training, "build_learner", broken_for_alpha_07)
+    monkeypatch.setattr(run, "make_learner", broken_for_alpha_07)
     out = tmp_path / "sweep"
     outcome = run_sweep(spec, out, progress=False, figure=False)
     rows = {r["alpha"]: r for r in read_csv(out / "results.csv")}
@@ -155,7 +156,7 @@ def test_a_failing_point_is_recorded_with_its_error_and_the_others_finish(tmp_pa
     assert json.loads((out / "best.json").read_text())["values"]["alpha"] in ("0.5", "1")
     assert not outcome.interrupted and "3 of 3 runs done" in outcome.summary
 
-    monkeypatch.setattr(training, "build_learner", real)
+    monkeypatch.setattr(run, "make_learner", real)
     again = run_sweep(spec, out, progress=False, figure=False)
     assert again.n_run == 1 and not read_csv(out / "results.csv")[1]["error"]  # the failed point is retried
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.training import RunConfig
+from somarm.run_config import RunConfig
 from somarm.validation import check_int
 
 __all__ = ["TASK_PREFIX", "Axis", "SweepSpec", "parse_grid", "parse_random", "preset_value", "same_value", "config_key"]
@@ -115,7 +115,7 @@ class SweepSpec:
     """Learner settings fixed for every point (``--set``)."""
     task_params: dict[str, str] = field(default_factory=dict)
     """Task parameters fixed for every point (``--task-set``)."""
-    n_trials: int = 5
+    n_trials: int = 1
     n_steps: int | None = None
     seed: int = 0
     """The first seed."""

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from somarm import evaluation, presets, training
+from somarm import presets, run
+from somarm.run_config import RunConfig
 from somarm.sweep.spec import SweepSpec, config_key
-from somarm.training import RunConfig
 
 __all__ = ["Chunk", "plan_chunks", "validate_points", "run_chunk", "point_label", "failed_row", "METRICS"]
 
@@ -60,7 +60,7 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
             presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
             task_key = json.dumps(config.task_params, sort_keys=True)
             if task_key not in tasks_checked:
-                training.build_task(config)
+                run.make_task(config)
                 tasks_checked.add(task_key)
         except ValueError as exc:
             raise ValueError(f"sweep point {point_label(point)}: {exc}") from None
@@ -106,24 +106,27 @@ def plan_chunks(
     return chunks
 
 
-def _row(index: int, seed: int, result: training.RunResult) -> dict:
-    """Result row of one trained point: its errors on fresh observations and at the end of training."""
-    config = result.config
-    greedy = evaluation.evaluate_greedy(
-        result.learner, result.task, n_observations=GREEDY_OBSERVATIONS, seed=config.seed
-    )
-    window = min(1000, max(config.block, config.n_steps // 10))  # as the run summary's window
-    final = training.final_rewards(result.block_means, config.block, window)
+def _number(value: float | None) -> float:
+    """summary.json writes a mean over nothing (no complete block) as null."""
+    return float("nan") if value is None else float(value)
+
+
+def _row(index: int, seed: int, result: run.RunResult) -> dict:
+    """Result row of one trained point: the errors its run folder's summary.json would hold."""
+    greedy = run.greedy_summary(result, GREEDY_OBSERVATIONS)
+    if "greedy_mean_reward" not in greedy:
+        raise ValueError(greedy.get("greedy_error", "no step was trained"))
+    summary = run.summary(result)
     return {
         "point": index,
         "seed": seed,
-        "key": config_key(config),
-        "greedy_error": -float(greedy.mean()),
-        "greedy_error_sd": float(greedy.std()),
-        "final_error": -float(np.mean(final)),
-        "final_error_sd": float(np.std(final)),
+        "key": config_key(result.config),
+        "greedy_error": -greedy["greedy_mean_reward"],
+        "greedy_error_sd": greedy["greedy_sd_reward"],
+        "final_error": -_number(summary["final_mean_reward"]),
+        "final_error_sd": _number(summary["final_sd_reward"]),
         "steps": result.steps_done,
-        "group_wall_time_s": round(result.wall_time, 3),
+        "group_wall_time_s": summary["wall_time_s"],
         "error": "",
     }
 
@@ -146,7 +149,7 @@ def run_chunk(chunk: Chunk, *, progress: bool = False) -> tuple[list[dict], bool
     configs = [config for _, _, config in chunk.items]
     label = f"sweep {chunk.items[0][2].task} seed {chunk.items[0][1]} ({len(configs)} points)"
     try:
-        results = training.train_group(configs, progress=progress, label=label)
+        results = run.train_group(configs, progress=progress, label=label)
     except Exception as exc:  # noqa: BLE001 - any failure of one point; the others are retried alone
         if len(configs) == 1:
             index, seed, config = chunk.items[0]
