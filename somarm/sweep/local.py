@@ -56,7 +56,7 @@ def run_local(chunks: list[Chunk], save: RowSink, *, workers: int = 1, progress:
         for future in concurrent.futures.as_completed(futures):
             try:
                 rows, stopped = future.result()
-            except Exception as exc:  # noqa: BLE001 - a worker process died: its points failed
+            except Exception as exc:  # a worker process died: its points failed
                 rows, stopped = [failed_row(i, s, c, exc) for i, s, c in futures[future].items], False
             for row in rows:
                 save(row)
@@ -76,7 +76,7 @@ def run_local(chunks: list[Chunk], save: RowSink, *, workers: int = 1, progress:
                 try:
                     for row in future.result()[0]:
                         save(row)
-                except (Exception, KeyboardInterrupt):  # noqa: BLE001 - a worker stopped mid-point
+                except (Exception, KeyboardInterrupt):  # a worker stopped mid-point
                     pass
     finally:
         pool.shutdown(wait=True, cancel_futures=True)

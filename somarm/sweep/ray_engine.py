@@ -95,7 +95,6 @@ def run_ray(
       ValueError: Ray is not installed (one line saying how to install it).
     """
     try:
-        import ray  # noqa: F401
         from ray import tune
     except ImportError:
         raise ValueError('the ray engine needs Ray Tune: pip install -e ".[sweep]"') from None

@@ -150,7 +150,7 @@ def run_chunk(chunk: Chunk, *, progress: bool = False) -> tuple[list[dict], bool
     label = f"sweep {chunk.items[0][2].task} seed {chunk.items[0][1]} ({len(configs)} points)"
     try:
         results = run.train_group(configs, progress=progress, label=label)
-    except Exception as exc:  # noqa: BLE001 - any failure of one point; the others are retried alone
+    except Exception as exc:  # any failure of one point; the others are retried alone
         if len(configs) == 1:
             index, seed, config = chunk.items[0]
             return [failed_row(index, seed, config, exc)], False
@@ -167,7 +167,7 @@ def run_chunk(chunk: Chunk, *, progress: bool = False) -> tuple[list[dict], bool
     for (index, seed, config), result in zip(chunk.items, results, strict=True):
         try:
             rows.append(_row(index, seed, result))
-        except Exception as exc:  # noqa: BLE001 - recorded in the row; the sweep goes on
+        except Exception as exc:  # recorded in the row; the sweep goes on
             rows.append(failed_row(index, seed, config, exc))
     return rows, False
 
