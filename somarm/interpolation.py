@@ -1,0 +1,205 @@
+"""The interpolated SOM-Q response (the paper's section 6 extension), compiled with numba.
+
+The paper's greedy response is the weight vector of one action unit: the best one for the one
+winning input unit, so it changes in jumps between the maps' units. The interpolated response
+blends the greedy actions of the ``n_basis`` input units nearest to the observation:
+
+- basis over the input map: the ``n_basis`` nearest units (``len(input_shape) + 1``: 2 on a
+  line, 3 on a rectangle) get the tapered inverse-distance weights
+  ``v_i = 1/d_i - 1/d_(n_basis+1)`` (``d`` Euclidean, ``d_(n_basis+1)`` the next unit's
+  distance), normalised to sum to 1. A unit's weight falls to 0 before it leaves the nearest
+  set, so the weights vary continuously with the observation, and an observation on a unit
+  gets that unit's action alone. Between two units far from the others they are linear.
+- basis over the action map: each of those units contributes the weights of its own greedy
+  action unit (the best Q in its row). A unit whose greedy action unit lies more than
+  ``MAX_JUMP`` grid steps from the winner's greedy action unit is left out: there the learned
+  mapping jumps (a many-to-one or discontiguous mapping, e.g. four_goals' quadrants), and a
+  blend of two far-apart actions would serve neither side.
+- exploring steps (probability p) keep the paper's random action unit, uninterpolated.
+
+Learning (steps 7 to 9, unchanged kernel): the winning pair is the winner j and its greedy unit
+k. Step 7 pulls the action map (around k) towards the *corrected target*
+``u_k + (a' - a)``, the value u_k would need for the blended response a to have been the
+perturbed action a'; it equals a' when a = u_k, i.e. the paper's rule. The acts here write
+that target into ``targets``; ``somarm._kernels.learn_kernel`` uses it for step 7.
+
+Random numbers: the same row as the winner response, ``[explore?, random unit, tie-break,
+noise...]``; every greedy choice here breaks ties with the row's tie-break number.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+__all__ = ["MAX_JUMP", "n_basis_for", "act_kernel", "predict_kernel"]
+
+#: Largest action-map grid distance between the winner's greedy action unit and a blended one.
+MAX_JUMP = 1.0
+
+_TWO_PI = 2.0 * math.pi
+
+
+def n_basis_for(input_shape: tuple[int, ...]) -> int:
+    """How many nearest input units the response blends: grid dimensions + 1, at most the units."""
+    return min(len(input_shape) + 1, int(np.prod(input_shape)))
+
+
+@numba.njit(cache=True)
+def _nearest(x, weights, order, squared):
+    """Fill ``order``/``squared`` with the ``len(order)`` nearest units, ascending (ties: lower index)."""
+    count = 0
+    size = order.shape[0]
+    for m in range(weights.shape[0]):
+        total = 0.0
+        for i in range(x.shape[0]):
+            diff = x[i] - weights[m, i]
+            total += diff * diff
+        if count < size:
+            count += 1
+        elif not total < squared[size - 1]:
+            continue
+        place = count - 1
+        while place > 0 and total < squared[place - 1]:
+            order[place] = order[place - 1]
+            squared[place] = squared[place - 1]
+            place -= 1
+        order[place] = m
+        squared[place] = total
+
+
+@numba.njit(cache=True)
+def _greedy(q_row, tie):
+    """The action unit with the best Q; ties broken by the uniform number ``tie`` (0: lowest index)."""
+    top = q_row[0]
+    for n in range(1, q_row.shape[0]):
+        if q_row[n] > top:
+            top = q_row[n]
+    n_tied = 0
+    for n in range(q_row.shape[0]):
+        if q_row[n] == top:
+            n_tied += 1
+    pick = min(int(tie * n_tied), n_tied - 1)
+    for n in range(q_row.shape[0]):
+        if q_row[n] == top:
+            if pick == 0:
+                return n
+            pick -= 1
+    return 0
+
+
+@numba.njit(cache=True)
+def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, order, squared, beta,
+              units, out):
+    """The blended greedy action of one trial into ``out``; returns (winner j, its greedy unit k)."""
+    _nearest(x, input_weights, order, squared)
+    n_found = order.shape[0]
+    n_used = min(n_basis, n_found)
+    for i in range(n_used):
+        beta[i] = 0.0
+    if squared[0] == 0.0:
+        beta[0] = 1.0
+    else:
+        cut = 1.0 / math.sqrt(squared[n_basis]) if n_found > n_basis else 0.0
+        total = 0.0
+        for i in range(n_used):
+            beta[i] = 1.0 / math.sqrt(squared[i]) - cut
+            total += beta[i]
+        if total > 0.0:
+            for i in range(n_used):
+                beta[i] = beta[i] / total
+        else:  # all equally far: the winner alone
+            beta[0] = 1.0
+            for i in range(1, n_used):
+                beta[i] = 0.0
+    k = _greedy(q[order[0]], tie)
+    units[0] = k
+    kept = beta[0]
+    for i in range(1, n_used):
+        units[i] = _greedy(q[order[i]], tie) if beta[i] > 0.0 else k
+        if beta[i] > 0.0 and distances_a[k, units[i]] > MAX_JUMP:
+            beta[i] = 0.0
+        kept += beta[i]
+    for d in range(out.shape[0]):
+        value = 0.0
+        for i in range(n_used):
+            if beta[i] > 0.0:
+                value += (beta[i] / kept) * action_weights[units[i], d]
+        out[d] = value
+    return order[0], k
+
+
+@numba.njit(cache=True)
+def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, gaussian,
+               distances_a, n_basis, winners, units, actions, targets, shifted):
+    """Steps 1 to 5 with the interpolated response, for every trial, in place.
+
+    Shapes as ``somarm._kernels.act_kernel``, plus ``distances_a (n_a, n_a)`` and ``targets
+    (n_trials, action_dim)``: ``actions`` receives the perturbed actions a' (the output) and
+    ``targets`` the corrected step-7 targets ``u_k + (a' - a)``, both inside the bounds.
+    """
+    n_a = q.shape[2]
+    size = min(n_basis + 1, input_weights.shape[1])
+    order = np.empty(size, dtype=np.int64)
+    squared = np.empty(size)
+    beta = np.empty(size)
+    blended_units = np.empty(size, dtype=np.int64)
+    proposal = np.empty(actions.shape[1])
+    for trial in range(observations.shape[0]):
+        row = rows[trial]
+        shifted[trial] = not row[0] < p
+        if row[0] < p:
+            # Exploring: the paper's random action unit, its weights unblended.
+            j = _winner_only(observations[trial], input_weights[trial])
+            k = min(int(row[1] * n_a), n_a - 1)
+            for i in range(proposal.shape[0]):
+                proposal[i] = action_weights[trial, k, i]
+        else:
+            j, k = _response(observations[trial], input_weights[trial], action_weights[trial], q[trial],
+                             row[2], distances_a, n_basis, order, squared, beta, blended_units, proposal)
+        for i in range(actions.shape[1]):
+            if gaussian:
+                u1 = row[3 + 2 * i]
+                u2 = row[4 + 2 * i]
+                noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(_TWO_PI * u2)
+            else:
+                noise = 2.0 * row[3 + i] - 1.0
+            value = min(max(proposal[i] + noise * epsilon[i], low[i]), high[i])
+            actions[trial, i] = value
+            target = value + (action_weights[trial, k, i] - proposal[i])
+            targets[trial, i] = min(max(target, low[i]), high[i])
+        winners[trial] = j
+        units[trial] = k
+
+
+@numba.njit(cache=True)
+def _winner_only(x, weights):
+    best = np.inf
+    j = 0
+    for m in range(weights.shape[0]):
+        total = 0.0
+        for i in range(x.shape[0]):
+            diff = x[i] - weights[m, i]
+            total += diff * diff
+        if total < best:
+            best = total
+            j = m
+    return j
+
+
+@numba.njit(cache=True)
+def predict_kernel(observations, input_weights, action_weights, q, distances_a, n_basis, out):
+    """Greedy interpolated responses, ties to the lowest index: observations ``(n_trials, n_obs,
+    obs_dim)`` -> ``out (n_trials, n_obs, action_dim)``."""
+    size = min(n_basis + 1, input_weights.shape[1])
+    order = np.empty(size, dtype=np.int64)
+    squared = np.empty(size)
+    beta = np.empty(size)
+    blended_units = np.empty(size, dtype=np.int64)
+    for trial in range(observations.shape[0]):
+        for o in range(observations.shape[1]):
+            _response(observations[trial, o], input_weights[trial], action_weights[trial], q[trial], 0.0,
+                      distances_a, n_basis, order, squared, beta, blended_units, out[trial, o])
+
