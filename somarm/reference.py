@@ -17,9 +17,9 @@ import math
 
 import numpy as np
 
+from .interpolation import MAX_JUMP, n_basis_for
 from .learners import initial_generator
 from .som import grid_coordinates, grid_distances, neighbourhood
-from .interpolation import MAX_JUMP, n_basis_for
 from .somq import SOMQConfig, row_width
 from .streams import UniformStreams, trial_ids_for
 from .validation import check_array, check_bounds
