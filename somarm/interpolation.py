@@ -91,8 +91,8 @@ def _greedy(q_row, tie):
 
 
 @numba.njit(cache=True)
-def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, order, squared, beta,
-              units, out):
+def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, order, squared,
+              beta, units, out):
     """The blended greedy action of one trial into ``out``; returns (winner j, its greedy unit k)."""
     _nearest(x, input_weights, order, squared)
     n_found = order.shape[0]
@@ -127,7 +127,7 @@ def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, or
         for i in range(n_used):
             if beta[i] > 0.0:
                 value += (beta[i] / kept) * action_weights[units[i], d]
-        out[d] = value
+        out[d] = min(max(value, low[d]), high[d])  # a blend of units in the bounds, up to rounding
     return order[0], k
 
 
@@ -158,7 +158,8 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
                 proposal[i] = action_weights[trial, k, i]
         else:
             j, k = _response(observations[trial], input_weights[trial], action_weights[trial], q[trial],
-                             row[2], distances_a, n_basis, order, squared, beta, blended_units, proposal)
+                             row[2], distances_a, n_basis, low, high, order, squared, beta, blended_units,
+                             proposal)
         for i in range(actions.shape[1]):
             if gaussian:
                 u1 = row[3 + 2 * i]
@@ -190,7 +191,7 @@ def _winner_only(x, weights):
 
 
 @numba.njit(cache=True)
-def predict_kernel(observations, input_weights, action_weights, q, distances_a, n_basis, out):
+def predict_kernel(observations, input_weights, action_weights, q, distances_a, n_basis, low, high, out):
     """Greedy interpolated responses, ties to the lowest index: observations ``(n_trials, n_obs,
     obs_dim)`` -> ``out (n_trials, n_obs, action_dim)``."""
     size = min(n_basis + 1, input_weights.shape[1])
@@ -201,5 +202,5 @@ def predict_kernel(observations, input_weights, action_weights, q, distances_a, 
     for trial in range(observations.shape[0]):
         for o in range(observations.shape[1]):
             _response(observations[trial, o], input_weights[trial], action_weights[trial], q[trial], 0.0,
-                      distances_a, n_basis, order, squared, beta, blended_units, out[trial, o])
+                      distances_a, n_basis, low, high, order, squared, beta, blended_units, out[trial, o])
 

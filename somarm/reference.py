@@ -47,7 +47,7 @@ def _greedy(q_row: np.ndarray, tie: float) -> int:
     return tied[min(int(tie * len(tied)), len(tied) - 1)]
 
 
-def interpolated_response(x, input_weights, action_weights, q, tie, distances_a, n_basis):
+def interpolated_response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high):
     """The interpolated greedy response (``somarm.interpolation``), written out plainly.
 
     Returns:
@@ -89,7 +89,7 @@ def interpolated_response(x, input_weights, action_weights, q, tie, distances_a,
         for i in range(n_used):
             if beta[i] > 0.0:
                 value += (beta[i] / kept) * action_weights[units[i], d]
-        response[d] = value
+        response[d] = min(max(value, low[d]), high[d])
     return order[0], k, response
 
 
@@ -147,7 +147,8 @@ class ReferenceSOMQ:
         if cfg.response == "interpolated" and not explored:
             # ... or, interpolated, the blend of the nearest input units' greedy actions.
             j, k, proposed = interpolated_response(x, self.input_weights, self.action_weights, self.q, row[2],
-                                                   self.distances_a, n_basis_for(cfg.input_shape))
+                                                   self.distances_a, n_basis_for(cfg.input_shape),
+                                                   self.action_low, self.action_high)
         # Step 4: perturb each element by random(-1, 1) * epsilon (or Gaussian * epsilon) and keep
         # the result inside the action bounds.
         epsilon = cfg.epsilon.value(t)
@@ -190,7 +191,8 @@ class ReferenceSOMQ:
         if target > self.q[j, k]:
             rates = cfg.lambda_a.value(t) * neighbourhood(self.distances_a[k], cfg.n_a.value(t))
             if cfg.response == "interpolated" and not explored:
-                self.action_weights += rates[:, None] * (target_k - self.action_weights[k])
+                shifted = self.action_weights + rates[:, None] * (target_k - self.action_weights[k])
+                self.action_weights = np.clip(shifted, self.action_low, self.action_high)
             else:
                 self.action_weights += rates[:, None] * (target_k - self.action_weights)
         # Step 8: neighbourhood Q-learning (or only the winning pair, -NL).

@@ -215,6 +215,7 @@ class SOMQ(LearnerBase):
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
             values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
             self._distances_s, self._distances_a, self.config.neighbourhood_q, self._shifted,
+            self.action_low, self.action_high,
         )
         self._pending = False
         self.t += 1
@@ -247,7 +248,8 @@ class SOMQ(LearnerBase):
             many = x.reshape(self.n_trials, -1, self.obs_dim)
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             interpolation.predict_kernel(np.ascontiguousarray(many), self.input_weights, self.action_weights,
-                                         self.q, self._distances_a, self._n_basis, out)
+                                         self.q, self._distances_a, self._n_basis, self.action_low,
+                                         self.action_high, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
         _, units = self.greedy_units(observations)
         index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))

@@ -132,7 +132,8 @@ def test_batched_equals_reference_exactly(input_shape, neighbourhood_q, gamma, n
         np.testing.assert_array_equal(batched.q[i], ref.q)
         for o in range(20):
             _, _, response = interpolated_response(probes[i, o], ref.input_weights, ref.action_weights, ref.q,
-                                                   0.0, ref.distances_a, interpolation.n_basis_for(input_shape))
+                                                   0.0, ref.distances_a, interpolation.n_basis_for(input_shape),
+                                                   ref.action_low, ref.action_high)
             np.testing.assert_array_equal(predicted[i, o], response)
     assert shifted > 100  # most steps were interpolated greedy steps
 
