@@ -15,7 +15,11 @@ blends the greedy actions of the ``n_basis`` input units nearest to the observat
   ``MAX_JUMP`` grid steps from the winner's greedy action unit is left out: there the learned
   mapping jumps (a many-to-one or discontiguous mapping, e.g. four_goals' quadrants), and a
   blend of two far-apart actions would serve neither side.
-- exploring steps (probability p) keep the paper's random action unit, uninterpolated.
+- exploring steps (probability p) propose one action unit's weights, uninterpolated, as the paper;
+  but half of them (``NEIGHBOUR_SHARE``) try a grid neighbour of the winner's greedy action unit
+  instead of a random unit. Input units that share one greedy action unit (a third of them on
+  reach2) can only learn that the next unit serves them better by trying it; a random unit out
+  of 50 is almost never the next one.
 
 Learning (steps 7 to 9, unchanged kernel): the winning pair is the winner j and its greedy unit
 k. Step 7 pulls the action map (around k) towards the *corrected target*
@@ -34,10 +38,12 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["MAX_JUMP", "n_basis_for", "act_kernel", "predict_kernel"]
+__all__ = ["MAX_JUMP", "NEIGHBOUR_SHARE", "n_basis_for", "act_kernel", "predict_kernel"]
 
 #: Largest action-map grid distance between the winner's greedy action unit and a blended one.
 MAX_JUMP = 1.0
+#: Share of the exploring steps that try a map neighbour of the winner's greedy action unit.
+NEIGHBOUR_SHARE = 0.5
 
 _TWO_PI = 2.0 * math.pi
 
@@ -91,6 +97,29 @@ def _greedy(q_row, tie):
 
 
 @numba.njit(cache=True)
+def _exploring_unit(q_row, u, tie, distances_a):
+    """Step 2 when exploring: with probability NEIGHBOUR_SHARE (``u`` below it) a grid neighbour of the
+    greedy unit, else (``u`` rescaled) a random unit as in the paper."""
+    n_a = q_row.shape[0]
+    if u >= NEIGHBOUR_SHARE:
+        return min(int((u - NEIGHBOUR_SHARE) / (1.0 - NEIGHBOUR_SHARE) * n_a), n_a - 1)
+    best = _greedy(q_row, tie)
+    count = 0
+    for n in range(n_a):
+        if 0.0 < distances_a[best, n] <= 1.0:
+            count += 1
+    if count == 0:  # a one-unit map
+        return best
+    pick = min(int(u / NEIGHBOUR_SHARE * count), count - 1)
+    for n in range(n_a):
+        if 0.0 < distances_a[best, n] <= 1.0:
+            if pick == 0:
+                return n
+            pick -= 1
+    return best
+
+
+@numba.njit(cache=True)
 def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, order, squared,
               beta, units, out):
     """The blended greedy action of one trial into ``out``; returns (winner j, its greedy unit k)."""
@@ -140,7 +169,6 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
     (n_trials, action_dim)``: ``actions`` receives the perturbed actions a' (the output) and
     ``targets`` the corrected step-7 targets ``u_k + (a' - a)``, both inside the bounds.
     """
-    n_a = q.shape[2]
     size = min(n_basis + 1, input_weights.shape[1])
     order = np.empty(size, dtype=np.int64)
     squared = np.empty(size)
@@ -153,7 +181,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         if row[0] < p:
             # Exploring: the paper's random action unit, its weights unblended.
             j = _winner_only(observations[trial], input_weights[trial])
-            k = min(int(row[1] * n_a), n_a - 1)
+            k = _exploring_unit(q[trial, j], row[1], row[2], distances_a)
             for i in range(proposal.shape[0]):
                 proposal[i] = action_weights[trial, k, i]
         else:

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .interpolation import MAX_JUMP, n_basis_for
+from .interpolation import MAX_JUMP, NEIGHBOUR_SHARE, n_basis_for
 from .learners import initial_generator
 from .som import grid_coordinates, grid_distances, neighbourhood
 from .somq import SOMQConfig, row_width
@@ -45,6 +45,19 @@ def _greedy(q_row: np.ndarray, tie: float) -> int:
     top = q_row.max()
     tied = [n for n in range(q_row.size) if q_row[n] == top]
     return tied[min(int(tie * len(tied)), len(tied) - 1)]
+
+
+def exploring_unit(q_row: np.ndarray, u: float, tie: float, distances_a: np.ndarray) -> int:
+    """The interpolated response's exploring unit: below NEIGHBOUR_SHARE a grid neighbour of the greedy
+    unit (in index order), else a random unit, ``u`` rescaled to [0, 1)."""
+    n_a = q_row.size
+    if u >= NEIGHBOUR_SHARE:
+        return min(int((u - NEIGHBOUR_SHARE) / (1.0 - NEIGHBOUR_SHARE) * n_a), n_a - 1)
+    best = _greedy(q_row, tie)
+    neighbours = [n for n in range(n_a) if 0.0 < distances_a[best, n] <= 1.0]
+    if not neighbours:
+        return best
+    return neighbours[min(int(u / NEIGHBOUR_SHARE * len(neighbours)), len(neighbours) - 1)]
 
 
 def interpolated_response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high):
@@ -136,7 +149,9 @@ class ReferenceSOMQ:
         # Step 2: a random action unit with probability p, else the best Q for s_j (ties at random).
         n_a = self.q.shape[1]
         explored = bool(row[0] < cfg.p.value(t))
-        if explored:
+        if explored and cfg.response == "interpolated":
+            k = exploring_unit(self.q[j], row[1], row[2], self.distances_a)
+        elif explored:
             k = min(int(row[1] * n_a), n_a - 1)
         else:
             top = self.q[j].max()

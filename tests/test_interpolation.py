@@ -81,9 +81,18 @@ def test_one_greedy_step_exact_arrays():
     np.testing.assert_array_equal(learner.action_weights[0], expected)
 
 
+def test_exploring_tries_a_neighbour_of_the_greedy_unit_or_a_random_unit():
+    learner = _planted(p=1.0)
+    for u, unit in ((0.0, 0), (0.24, 0), (0.26, 2), (0.5, 0), (0.75, 2), (0.99, 4)):
+        learner._streams.next = lambda u=u: np.array([[0.0, u, 0.0, 0.5, 0.5]])  # explore; x on unit 1
+        learner.act([[1.0]])
+        assert learner._units[0] == unit and not learner._shifted[0], u
+        learner._pending = False
+
+
 def test_an_exploring_step_is_the_papers_step():
     learner = _planted(epsilon=0.4, p=1.0)
-    learner._streams.next = lambda: np.array([[0.0, 0.0, 0.0, 1.0, 0.5]])  # explore; unit 0; noise +1, 0
+    learner._streams.next = lambda: np.array([[0.0, 0.55, 0.0, 1.0, 0.5]])  # explore; random unit 0; noise +1, 0
     action = learner.act([[1.0]])
     np.testing.assert_array_equal(action, [[-0.6, 0.0]])
     assert not learner._shifted[0]
@@ -167,3 +176,24 @@ def test_response_is_a_setting_like_any_other():
         SOMQConfig().with_overrides({"response": "nearest"})
     with pytest.raises(ValueError, match="response must be one of winner, interpolated, got 3"):
         SOMQConfig(response=3)
+
+
+def test_cli_trains_views_and_rejects_an_unknown_response(tmp_path, capsys):
+    from somarm.cli import main
+    from somarm.training import load_run
+
+    run = tmp_path / "run"
+    args = ["train", "reach2", "--set", "response=interpolated", "--preset", "table1+", "--trials", "2",
+            "--steps", "300", "--no-progress", "--no-figures", "--out", str(run)]
+    assert main(args) == 0
+    config, learner = load_run(run)
+    assert config.overrides["response"] == "interpolated" and learner.config.response == "interpolated"
+    assert learner.config.lambda_a.floor == 0.1  # table1+
+    page = tmp_path / "view.html"
+    assert main(["view", "reach2", "--run", str(run), "--html", str(page), "--goals", "3"]) == 0
+    assert page.stat().st_size > 1000
+    capsys.readouterr()
+    assert main(["train", "reach2", "--set", "response=nearest", "--steps", "10", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("somarm: error:") and "response must be one of winner, interpolated" in err
+    assert len(err.splitlines()) == 1
