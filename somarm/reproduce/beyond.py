@@ -189,15 +189,19 @@ def _greedy_bars(ctx: Context, greedy):
     keys = list(greedy)
     x = np.arange(len(keys))
     means = np.array([greedy[k].mean() for k in keys])
-    sds = np.array([greedy[k].std() for k in keys])
-    ax.bar(x, means, yerr=sds, capsize=3, color=[_STYLE[k[2]] for k in keys])
+    ax.bar(x, means, color=[_STYLE[k[2]] for k in keys], alpha=0.8)
     for i, key in enumerate(keys):
-        ax.text(i, means[i] + sds[i], f"{means[i]:.3f}", ha="center", va="bottom", fontsize=8)
+        trials = greedy[key]
+        spread = np.linspace(-0.25, 0.25, trials.size) if trials.size > 1 else np.zeros(1)
+        ax.plot(i + spread, trials, "k.", ms=3, label="one trial" if i == 0 else None)
+        ax.text(i, max(means[i], trials.max()) * 1.08, f"{means[i]:.3f}", ha="center", va="bottom", fontsize=8)
         if key[0] in TARGETS and key[1] == TARGETS[key[0]][1]:
             ax.hlines(TARGETS[key[0]][0], i - 0.45, i + 0.45, color="k", ls=":")
     ax.set_xticks(x, [f"{t}\n{p}\n{r}" for t, p, r in keys], fontsize=7)
-    ax.set(yscale="log", ylabel="greedy error (mean over trials, sd bars)",
-           title="Greedy error: winner (blue) and interpolated (orange) responses; dotted: the issue's targets")
+    ax.set(yscale="log", ylabel="greedy error (bar: mean over trials)",
+           title="Greedy error: winner (blue) and interpolated (orange) responses; dots: trials; "
+                 "dotted: the issue's targets")
+    ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3, axis="y", which="both")
     return plots.save(fig, ctx.path("beyond_greedy_error.png"))
 
