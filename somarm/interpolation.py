@@ -88,22 +88,30 @@ def _nearest(x, weights, order, squared):
 
 @numba.njit(cache=True)
 def _greedy(q_row, tie):
-    """The action unit with the best Q; ties broken by the uniform number ``tie`` (0: lowest index)."""
+    """The action unit with the best Q; ties broken by the uniform number ``tie`` (0: lowest index).
+
+    One pass finds the first best unit and counts its ties; a second runs only if there are ties.
+    """
     top = q_row[0]
+    best = 0
+    n_tied = 1
     for n in range(1, q_row.shape[0]):
-        if q_row[n] > top:
-            top = q_row[n]
-    n_tied = 0
-    for n in range(q_row.shape[0]):
-        if q_row[n] == top:
+        value = q_row[n]
+        if value > top:
+            top = value
+            best = n
+            n_tied = 1
+        elif value == top:
             n_tied += 1
+    if n_tied == 1:
+        return best
     pick = min(int(tie * n_tied), n_tied - 1)
-    for n in range(q_row.shape[0]):
+    for n in range(best, q_row.shape[0]):
         if q_row[n] == top:
             if pick == 0:
                 return n
             pick -= 1
-    return 0
+    return best
 
 
 @numba.njit(cache=True)
