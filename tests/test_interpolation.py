@@ -180,7 +180,7 @@ def test_response_is_a_setting_like_any_other():
 
 def test_cli_trains_views_and_rejects_an_unknown_response(tmp_path, capsys):
     from somarm.cli import main
-    from somarm.training import load_run
+    from somarm.run import load as load_run
 
     run = tmp_path / "run"
     args = ["train", "reach2", "--set", "response=interpolated", "--preset", "table1+", "--trials", "2",

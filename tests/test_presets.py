@@ -12,7 +12,7 @@ NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+",
 
 
 def test_every_table_is_available_by_name_with_a_description():
-    assert list(presets.PRESETS) == NAMES
+    assert list(presets.PRESETS) == [*NAMES, "obstacle"]
     for name in NAMES:
         assert isinstance(presets.get(name), SOMQConfig)
         line = presets.describe(name)
@@ -27,6 +27,14 @@ def test_plus_presets_change_only_schedules_of_their_table():
         assert plus["response"] == "winner"
     assert presets.get("table1+").lambda_a.value(10**6) == 0.1
     assert presets.get("table5+").epsilon.value(10**6) == 0.02
+
+
+def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
+    preset = presets.PRESETS["obstacle"]
+    assert preset.task == "reach2_obstacle" and preset.config.gamma == 0.9
+    assert preset.config.input_shape == (12, 12) and preset.config.action_shape == (3, 3)
+    assert presets.describe("obstacle").startswith("beyond the paper")
+    assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
 
 
 def test_table1_values():

@@ -15,7 +15,7 @@ from somarm import evaluation, plots
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
 from somarm.reproduce.report import Claim, Section
 from somarm.somq import RESPONSES
-from somarm.training import RunConfig
+from somarm.run import RunConfig
 
 __all__ = ["TARGETS", "beyond"]
 

@@ -6,7 +6,6 @@ plays it on a live meshcat server until Ctrl-C or records it into a static HTML 
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,15 +13,11 @@ import numpy as np
 
 from somarm.streams import trial_generators
 from somarm.viewer import shows
-from somarm.viewer.adapters import goal_adapter
 from somarm.viewer.client import CommandSink
-from somarm.viewer.overlays import animation_command
+from somarm.viewer.motion import MotionShow
+from somarm.viewer.shows import arm_animation
 
 __all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play"]
-
-#: Frames of joint-space interpolation between two goals in the HTML animation.
-_FRAMES_BETWEEN_GOALS = 12
-_FRAMES_HOLDING_GOAL = 18
 
 
 @dataclass
@@ -36,6 +31,9 @@ class Session:
       errors: ``(n_goals,)`` minus the task's reward for each (the distance missed).
       fan: ``(n_units, action_dim)`` every action unit of the shown trial (the throw fan), or None.
       show: the task's show (``shows.show_for_task``).
+      paths: per goal, the joint angles ``(n_frames, nq)`` MuJoCo moved the arm through (actuated
+        reach: from the start pose until the reward is read; reach2_obstacle: a whole greedy
+        episode), or None where the arm is set, not driven.
     """
 
     task_name: str
@@ -44,6 +42,7 @@ class Session:
     errors: np.ndarray
     fan: np.ndarray | None
     show: object
+    paths: list[np.ndarray] | None = None
 
 
 def greedy_answers(task, learner, observations: np.ndarray, *, trial: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -63,7 +62,7 @@ def _sweep_order(observations: np.ndarray) -> np.ndarray:
 
 
 def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int = 12, seed: int = 0,
-                 trial: int = 0) -> Session:
+                 trial: int = 0, task_set: dict[str, str] | None = None) -> Session:
     """Goals drawn from the task (the ``viewer`` random stream of ``seed``) and the learner's answers.
 
     Args:
@@ -72,94 +71,68 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
       n_goals: how many goals are cycled through (or swept, for reach20).
       seed: seed of the goals (and of the untrained learner).
       trial: which trial of the run's learner is shown.
+      task_set: task parameters changed over the run's (``--task-set``), e.g. ``{"dynamics": "actuated"}``.
 
     Raises:
       ValueError: the run is for another task, or ``trial`` is not one of its trials.
     """
-    from somarm import tasks, training
+    from somarm import run as runs  # `run` is this function's folder argument
+    from somarm import tasks
 
     if run is not None:
-        config, learner = training.load_run(run)
+        config, learner = runs.load(run)
         if config.task != task_name:
             raise ValueError(f"--run {run} trained task {config.task!r}, not {task_name!r}")
-        task_params = training.task_kwargs(config.task_params)
+        task_params = tasks.parse_values(config.task_params)
     else:
-        config = training.RunConfig(task=task_name, seed=seed).resolved()
-        _, learner = training.build(config)
+        config = runs.RunConfig(task=task_name, seed=seed).resolved()
+        _, learner = runs.make(config)
         task_params = {}
     if not 0 <= trial < learner.n_trials:
         raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
+    task_params = {**task_params, **tasks.parse_values(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
-    if hasattr(task, "set_step"):
-        task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
+    task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
+    if getattr(task, "episodic", False):
+        return _episode_session(task_name, task, learner, observations, trial)
     observations = observations[_sweep_order(observations)]
     actions, errors = greedy_answers(task, learner, observations, trial=trial)
+    view = tasks.record(task_name).view
     fan = None
-    if task_name == "throw" and hasattr(learner, "action_weights"):
+    if view == "fan" and hasattr(learner, "action_weights"):
         fan = np.asarray(learner.action_weights)[trial]
-    if task_name == "reach20":
-        show = shows.SweepShow(shows.load_model("arm20"), len(observations),
-                               goal_of=goal_adapter(task_name, task))
-    else:
-        show = shows.show_for_task(task_name, task)
+    if getattr(task, "actuated", False):  # from the start pose (all zeros) to where the reward is read
+        moving = task.reached_angles(actions, path=True)
+        paths = [np.vstack([np.zeros((1, task.n_links)), path]) for path in moving]
+        return Session(task_name, observations, actions, errors, None,
+                       MotionShow(shows.show_for_task(task_name, task)), paths)
+    show = shows.show_for_task(task_name, task, sweep=len(observations) if view == "sweep" else None)
     return Session(task_name, observations, actions, errors, fan, show)
 
 
-def arm_animation(show: shows.ArmShow, observations: np.ndarray, actions: np.ndarray) -> dict:
-    """A looping animation through the goals: hold each pose, then move in joint space to the next."""
-    frames = []
-    n = len(observations)
-    for k in range(n):
-        frames += [show.frame(observations[k], actions[k])] * _FRAMES_HOLDING_GOAL
-        following = (k + 1) % n
-        for share in np.linspace(0.0, 1.0, _FRAMES_BETWEEN_GOALS + 2)[1:-1]:
-            action = (1 - share) * actions[k] + share * actions[following]
-            frames.append(show.frame(observations[following], action))
-    return animation_command(frames)
+def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: int) -> Session:
+    """Greedy episodes of a multi-step task from ``starts`` ``(n, obs_dim)``, with their MuJoCo paths."""
+
+    def policy(angles: np.ndarray) -> np.ndarray:
+        batch = np.broadcast_to(angles, (learner.n_trials, *angles.shape)).copy()
+        return np.asarray(learner.predict(batch))[trial]
+
+    episodes = task.run_episodes(policy, starts, paths=True)
+    ends = 1 + episodes["length"] * task.control_steps
+    paths = [episodes["path"][k, :ends[k]] for k in range(len(starts))]
+    finals = np.array([path[-1] for path in paths])
+    return Session(task_name, starts, finals, task.distances(finals), None,
+                   MotionShow(shows.show_for_task(task_name, task)), paths)
 
 
 def record(session: Session, sink: CommandSink) -> None:
-    """Everything of a session a static page needs: the scene and one looping animation (or the sweep)."""
-    show = session.show
-    if isinstance(show, shows.SweepShow):
-        sink.send_batch(show.setup())
-        sink.send_batch(show.frame(session.observations, session.actions))
-    elif isinstance(show, shows.ArmShow):
-        sink.send_batch(show.setup())
-        sink.send_batch(show.frame(session.observations[0], session.actions[0]))
-        sink.send(arm_animation(show, session.observations, session.actions))
-    else:
-        throws = session.fan if session.fan is not None else session.actions[:1]
-        show.show.n_balls = len(throws)
-        sink.send_batch(show.setup())
-        sink.send_batch(show.throws(session.observations[0], throws))
+    """Everything of a session a static page needs (the show decides: animation, sweep or fan)."""
+    session.show.record(session, sink)
 
 
 def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: bool = False,
          log=print) -> None:
     """Stream a session to a live server, goal after goal, until Ctrl-C (or one pass if ``once``)."""
-    show = session.show
-    if isinstance(show, shows.SweepShow) or (session.fan is not None):
-        record(session, sink)
-        log(f"{session.task_name}: {len(session.observations)} goals, mean error {session.errors.mean():.4f}")
-        while not once:
-            time.sleep(interval_s)
-        return
-    if isinstance(show, shows.ArmShow):
-        sink.send_batch(show.setup())
-    else:
-        show.show.n_balls = 1
-        sink.send_batch(show.setup())
-    while True:
-        for observation, action, error in zip(session.observations, session.actions, session.errors, strict=True):
-            if isinstance(show, shows.ArmShow):
-                sink.send_batch(show.frame(observation, action))
-            else:
-                sink.send_batch(show.throws(observation, action[None]))
-            log(f"goal {np.array2string(observation, precision=3)}  error {error:.4f}")
-            # A throw is watched to its landing before the next one starts.
-            time.sleep(interval_s if isinstance(show, shows.ArmShow) else max(interval_s, show.show.last_duration_s))
-        if once:
-            return
+    session.show.play(session, sink, interval_s=interval_s, once=once, log=log)
