@@ -307,17 +307,6 @@ def test_live_view_rejects_bad_arguments():
         view.update(1, np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
 
 
-def _tasks_ready() -> bool:
-    try:
-        from somarm import tasks, training  # noqa: F401
-    except ImportError:
-        return False
-    return hasattr(tasks, "make") and hasattr(training, "build")
-
-
-needs_tasks = pytest.mark.skipif(not _tasks_ready(), reason="somarm.tasks.make is not in the repository yet")
-
-
 def test_cli_rejects_bad_input_in_one_line(capsys):
     from somarm.viewer.cli import main
 
@@ -329,7 +318,6 @@ def test_cli_rejects_bad_input_in_one_line(capsys):
     assert main(["reach2", "--port", "70000"]) == 2
 
 
-@needs_tasks
 @pytest.mark.parametrize("task", ["reach2", "four_goals", "reach20", "throw"])
 def test_cli_writes_an_offline_animation(task, tmp_path, capsys):
     from somarm.viewer.cli import main
@@ -341,7 +329,6 @@ def test_cli_writes_an_offline_animation(task, tmp_path, capsys):
     assert "mean error" in capsys.readouterr().out
 
 
-@needs_tasks
 def test_cli_serves_until_ctrl_c_and_leaves_no_server():
     command = [sys.executable, "-m", "somarm.viewer.cli", "reach2", "--goals", "2", "--interval", "0.2"]
     env = dict(os.environ, MUJOCO_GL="disable")
