@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -10,16 +11,20 @@ import sys
 import threading
 from pathlib import Path
 
+from somarm.validation import OneLineParser, check_int
+
 __all__ = ["main"]
 
 _BENCHMARKS = ("learner", "tasks", "viewer")
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse that reports a usage error in one line (``somarm: error: ...``)."""
-
-    def error(self, message: str):  # noqa: D401 - argparse's signature
-        raise ValueError(message)
+def _out_folder(value: str | None, default: str) -> Path:
+    """The ``--out`` folder: the default when the flag is absent, never when it is given empty."""
+    if value is None:
+        return Path(default)
+    if not value.strip():
+        raise ValueError("--out needs a folder name, got an empty one")
+    return Path(value)
 
 
 def _check_writable(folder: Path) -> Path:
@@ -74,6 +79,15 @@ def _cmd_presets(args) -> int:
 def _cmd_train(args) -> int:
     from somarm import evaluation, training
 
+    # The flags first, by the names the user typed (the run config would name its fields).
+    for flag, value, minimum in (("--trials", args.trials, 1), ("--steps", args.steps, 1),
+                                 ("--seed", args.seed, 0), ("--block", args.block, 1)):
+        if value is not None:
+            check_int(flag, value, minimum=minimum)
+    for trial_id in args.trial_ids or []:
+        check_int("--trial-ids", trial_id, minimum=0)
+    if args.port is not None and not 0 <= args.port <= 65535:
+        raise ValueError(f"--port must be in 0..65535, got {args.port}")
     config = training.RunConfig(
         task=args.task,
         learner=args.learner,
@@ -88,7 +102,9 @@ def _cmd_train(args) -> int:
         block=args.block,
     ).resolved()
     training.build(config)  # fail fast on a bad preset, --set or --task-set before any output
-    out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
+    out = _out_folder(args.out, f"runs/{config.task}__{config.learner}__seed{config.seed}")
+    new_folder = not out.exists()
+    _check_writable(out)
     _stop_on_sigterm()
     hook = None
     view = None
@@ -98,9 +114,12 @@ def _cmd_train(args) -> int:
         try:
             view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
         except (OSError, RuntimeError) as exc:
-            raise ValueError(
-                f"the viewer could not start on --host {args.host}: {_first_line(exc)}"
-            ) from None
+            if new_folder:
+                with contextlib.suppress(OSError):
+                    out.rmdir()  # nothing was run: leave no empty folder behind
+            where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")
+            reason = _first_line(exc).split(" did not start: ")[-1]
+            raise ValueError(f"the viewer could not start on {where}: {reason}") from None
         print(f"viewer: {view.url}", flush=True)
         hook = view.update
     try:
@@ -135,6 +154,8 @@ def _cmd_train(args) -> int:
 def _cmd_evaluate(args) -> int:
     from somarm import evaluation, tasks, training
 
+    check_int("--observations", args.observations)
+    check_int("--seed", args.seed, minimum=0)
     config, learner = training.load_run(args.run)
     task = tasks.make(
         config.task,
@@ -157,7 +178,7 @@ def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
 
     runner.check_names(args.only)
-    out = _check_writable(Path(args.out))
+    out = _check_writable(_out_folder(args.out, "reproduce"))
     _stop_on_sigterm()
     return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
 
@@ -167,8 +188,8 @@ def _cmd_forward(module: str, argv: list[str]) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    parser = OneLineParser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     sub.add_parser("tasks", help="list the registered tasks").set_defaults(func=_cmd_tasks)
     sub.add_parser("presets", help="list the paper's parameter tables").set_defaults(func=_cmd_presets)
 
@@ -206,7 +227,7 @@ def _parser() -> argparse.ArgumentParser:
 
     reproduce = sub.add_parser("reproduce", help="run every experiment of the paper and write REPORT.md")
     reproduce.add_argument("--quick", action="store_true", help="reduced trial counts (a smoke test)")
-    reproduce.add_argument("--out", default="reproduce", help="output folder (default ./reproduce)")
+    reproduce.add_argument("--out", help="output folder (default ./reproduce)")
     reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
     reproduce.set_defaults(func=_cmd_reproduce)

@@ -23,7 +23,7 @@ from .io import atomic_save_npz
 from .schedules import Schedule, parse_bool, parse_decay, parse_shape
 from .som import grid_coordinates, grid_distances, map_shape
 from .streams import PURPOSES, UniformStreams, trial_ids_for
-from .validation import check_bounds, check_int, check_number
+from .validation import check_bounds, check_int, check_memory, check_number, real_array
 
 __all__ = [
     "LEARNERS",  # noqa: F822 (filled on first use by __getattr__)
@@ -31,6 +31,7 @@ __all__ = [
     "load_learner",
     "LearnerBase",
     "initial_generator",
+    "memory_needed",
     "validate_common",
     "config_to_dict",
     "config_from_dict",
@@ -78,6 +79,24 @@ def make_learner(kind: str, config: Any = None, **kwargs: Any):
 def load_learner(path: str | os.PathLike):
     """Reopen a learner saved with ``save(path)``, whatever its kind."""
     return _entry(_read_file(path)[0]["kind"])[1].load(path)
+
+
+def memory_needed(kind: str, config: Any, n_trials: int, obs_dim: int, action_dim: int) -> tuple[str, float]:
+    """What a learner will allocate: ``(description, bytes)``, e.g. for ``check_memory``.
+
+    Counts the grid-distance matrices (built through a ``(units, units, grid dims)`` difference)
+    and, per trial, the weights and Q (SOM-Q) or unit values (Motoric Map).
+    """
+    own_action_map = hasattr(config, "action_shape")  # SOM-Q; the Motoric Map's actions sit on its input map
+    n_s = int(np.prod(config.input_shape))
+    n_a = int(np.prod(config.action_shape)) if own_action_map else n_s
+    n_floats = n_s * n_s * (len(config.input_shape) + 1)
+    shapes = f"input_shape={'x'.join(map(str, config.input_shape))}"
+    if own_action_map:
+        n_floats += n_a * n_a * (len(config.action_shape) + 1)
+        shapes += f", action_shape={'x'.join(map(str, config.action_shape))}"
+    n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + (n_s * n_a if own_action_map else n_s))
+    return f"a {kind} learner with {shapes} and {n_trials} trial(s)", 8.0 * n_floats
 
 
 def initial_generator(seed: int, trial_id: int) -> np.random.Generator:
@@ -198,6 +217,42 @@ def override_config(config: Any, overrides: dict[str, str]) -> Any:
 
 
 # -- files ----------------------------------------------------------------------------------
+#: What a learner file's meta JSON holds: key -> (JSON type(s), what it is), checked on load.
+_META_KEYS: dict[str, tuple[tuple[type, ...], str]] = {
+    "kind": ((str,), "a learner kind"),
+    "config": ((dict,), "a JSON object of learner settings"),
+    "bounds": ((list,), "four lists: observation low, high, action low, high"),
+    "n_trials": ((int,), "a whole number"),
+    "seed": ((int,), "a whole number"),
+    "trial_ids": ((list,), "a list of whole numbers"),
+    "t": ((int,), "a whole number"),
+    "pending": ((bool,), "true or false"),
+    "streams": ((dict,), "a JSON object with width, block, pos and bit_generators"),
+}
+_STREAM_KEYS = ("width", "block", "pos", "bit_generators")
+
+
+def _check_meta(meta: Any, path: str | os.PathLike) -> dict[str, Any]:
+    """The meta JSON of a learner file, checked key by key; ValueError naming the file and the key."""
+    if not isinstance(meta, dict):
+        raise ValueError(f"{path} is a damaged learner file: its meta is a JSON {type(meta).__name__}, "
+                         "not an object")
+    for key, (types, what) in _META_KEYS.items():
+        value = meta.get(key)
+        if key not in meta or not isinstance(value, types) or (bool not in types and isinstance(value, bool)):
+            found = "missing" if key not in meta else f"{value!r:.40}"
+            raise ValueError(f"{path} is a damaged learner file: meta {key!r} must be {what}, got {found}")
+    if meta["kind"] not in _KINDS:
+        raise ValueError(f"{path} holds no learner kind; allowed: {', '.join(_KINDS)}")
+    missing = [key for key in _STREAM_KEYS if key not in meta["streams"]]
+    if missing:
+        raise ValueError(f"{path} is a damaged learner file: meta 'streams' lacks {', '.join(missing)}")
+    if len(meta["bounds"]) != 4:
+        raise ValueError(f"{path} is a damaged learner file: meta 'bounds' must be four lists, "
+                         f"got {len(meta['bounds'])}")
+    return meta
+
+
 def _read_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     try:
         with np.load(path, allow_pickle=False) as data:
@@ -206,9 +261,9 @@ def _read_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.nd
     except (OSError, KeyError, ValueError, zipfile.BadZipFile, EOFError) as exc:
         reason = "not a learner file (or a damaged one)" if "pickle" in str(exc) else str(exc)
         raise ValueError(f"cannot read a learner from {path}: {reason}") from None
-    if meta.get("kind") not in _KINDS:
-        raise ValueError(f"{path} holds no learner kind; allowed: {', '.join(_KINDS)}")
-    return meta, arrays
+    except RecursionError:  # JSON nested beyond Python's limit
+        raise ValueError(f"cannot read a learner from {path}: its meta is nested too deeply") from None
+    return _check_meta(meta, path), arrays
 
 
 class LearnerBase:
@@ -236,6 +291,7 @@ class LearnerBase:
         self.seed = check_int("seed", seed, minimum=0)
         self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
         self.obs_dim, self.action_dim = self.observation_low.size, self.action_low.size
+        self._check_sizes()
         self.t = 0
         self.input_grid, self._distances_s = self._grid(config.input_shape)
         self.input_weights = np.empty((self.n_trials, self.input_grid.shape[0], self.obs_dim))
@@ -252,6 +308,20 @@ class LearnerBase:
 
     def _build(self) -> None:
         raise NotImplementedError
+
+    def _check_sizes(self) -> None:
+        """Refuse, before allocating, maps that do not fit in memory and an epsilon that overflows."""
+        config = self.config
+        check_memory(*memory_needed(self.kind, config, self.n_trials, self.obs_dim, self.action_dim),
+                     "use smaller maps or fewer trials")
+        epsilon = config.epsilon
+        largest = max(epsilon.scale, epsilon.floor)
+        span = (self.action_high - self.action_low) if config.epsilon_relative else 1.0
+        with np.errstate(over="ignore"):
+            reach = largest * np.max(span) * 4.0 + np.max(np.abs([self.action_low, self.action_high]))
+        if not np.isfinite(reach):
+            raise ValueError(f"epsilon={largest:g} is too large: a perturbed action overflows; "
+                             "give a number of the size of the action range")
 
     @staticmethod
     def _grid(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -279,10 +349,7 @@ class LearnerBase:
     def _floats(name: str, value) -> np.ndarray:
         if type(value) is np.ndarray and value.dtype == np.float64:
             return value
-        try:
-            return np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}") from None
+        return real_array(name, value)
 
     def _check_observations(self, observations, *, allow_many=False, name="observations",
                             finite=True) -> np.ndarray:
@@ -294,6 +361,12 @@ class LearnerBase:
         if finite and not np.isfinite(x).all():
             raise ValueError(f"{name} must be finite, got NaN or inf")
         return x
+
+    def _check_not_pending(self) -> None:
+        # A second act() would overwrite the first one's actions before they were learned from.
+        if self._pending:
+            raise ValueError("act() was called again before learn(): call learn(rewards) for the "
+                             "previous actions first (each act() is learned from once)")
 
     def _check_learn(self, rewards, next_observations, terminal, *, finite=True):
         """``(rewards, bootstrap, next_observations)`` checked; see ``_check_observations`` for ``finite``."""
@@ -364,15 +437,32 @@ class LearnerBase:
         """Reopen a learner written by ``save``; it continues exactly where it stopped.
 
         Raises:
-          ValueError: the file is missing, unreadable or holds another kind of learner.
+          ValueError: the file is missing, unreadable, damaged (one line naming the file and what
+            is wrong) or holds another kind of learner.
         """
         meta, arrays = _read_file(path)
         if meta["kind"] != cls.kind:
             raise ValueError(f"{path} holds a {meta['kind']} learner, not {cls.kind}")
+        try:
+            learner = cls._from_meta(meta, arrays, path)
+        except (KeyError, TypeError, AttributeError, IndexError, OverflowError, ValueError) as exc:
+            # Whatever a damaged file breaks, say which file and what, in one line.
+            lines = str(exc).strip().splitlines()
+            reason = f"lacks {exc}" if isinstance(exc, KeyError) else (lines[-1] if lines else type(exc).__name__)
+            if str(path) in reason:
+                raise ValueError(reason) from None
+            raise ValueError(f"{path} is a damaged learner file: {reason}") from None
+        return learner
+
+    @classmethod
+    def _from_meta(cls, meta: dict[str, Any], arrays: dict[str, np.ndarray], path) -> LearnerBase:
         low_s, high_s, low_a, high_a = meta["bounds"]
         learner = cls(cls.config_class.from_dict(meta["config"]), observation_low=low_s,
                       observation_high=high_s, action_low=low_a, action_high=high_a,
                       n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
+        for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS + ("stream_buffer",):
+            if name not in arrays:
+                raise ValueError(f"{path} is a damaged learner file: array {name!r} is missing")
         for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS:
             target = getattr(learner, name)
             if arrays[name].shape != target.shape:

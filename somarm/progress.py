@@ -1,4 +1,10 @@
-"""A one-line progress display for headless training (no dependency, stderr only)."""
+"""A progress display for headless training (no dependency, stderr only).
+
+On a terminal it is one line redrawn in place (carriage returns). Into a file or a pipe (a CI
+log, ``2> log``) carriage returns would pile up, so there it writes plain lines instead: the first
+update (the run has started), then one at each tenth of the run or each minute, whichever comes
+first, and the final line once.
+"""
 
 from __future__ import annotations
 
@@ -8,14 +14,26 @@ from typing import TextIO
 
 __all__ = ["Progress"]
 
+#: Away from a terminal: one line per this share of the run, or per this many seconds.
+_LOG_SHARE = 0.1
+_LOG_PERIOD_S = 60.0
+
+
+def _is_terminal(stream: TextIO) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):  # no isatty, or a closed stream
+        return False
+
 
 class Progress:
-    """Redraws ``label [###...] step/total  mean reward -0.123  12.3 s``, at most ``rate_hz`` times a second.
+    """Draws ``label [###...] step/total  mean reward -0.123  12.3 s``.
 
     Args:
       total: number of steps.
       label: text before the bar.
       stream: where to draw (stderr by default); nothing is drawn when ``enabled`` is false.
+      rate_hz: on a terminal, redraw at most this many times a second.
     """
 
     def __init__(
@@ -31,29 +49,41 @@ class Progress:
         self.label = label
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = enabled
+        self.terminal = _is_terminal(self.stream)
         self._period = 1.0 / rate_hz
         self._start = time.perf_counter()
         self._last = -float("inf")
+        self._next_share = _LOG_SHARE
+        self._drawn_step: int | None = None
 
     def update(self, step: int, mean_reward: float, *, force: bool = False) -> None:
-        """Redraw if enough time has passed (or ``force``)."""
+        """Redraw if enough time (terminal) or enough of the run (log) has passed, or if ``force``."""
         if not self.enabled:
             return
         now = time.perf_counter()
-        if not force and now - self._last < self._period:
-            return
+        if self.terminal:
+            if not force and now - self._last < self._period:
+                return
+        elif not force:
+            started = self._drawn_step is not None
+            if started and step < self._next_share * self.total and now - self._last < _LOG_PERIOD_S:
+                return
+            while self._next_share * self.total <= step:
+                self._next_share += _LOG_SHARE
         self._last = now
+        self._drawn_step = step
         filled = int(30 * step / self.total)
         bar = "#" * filled + "." * (30 - filled)
-        self.stream.write(
-            f"\r{self.label} [{bar}] {step}/{self.total}  mean reward {mean_reward:+.4f}  "
-            f"{now - self._start:6.1f} s"
-        )
+        text = f"{self.label} [{bar}] {step}/{self.total}  mean reward {mean_reward:+.4f}  {now - self._start:6.1f} s"
+        self.stream.write(f"\r{text}" if self.terminal else f"{text}\n")
         self.stream.flush()
 
     def close(self, step: int, mean_reward: float) -> None:
-        """Draw the final state and end the line."""
-        if self.enabled:
+        """Draw the final state (unless it is already the last line drawn) and end the line."""
+        if not self.enabled:
+            return
+        if self._drawn_step != step:
             self.update(step, mean_reward, force=True)
+        if self.terminal and self._drawn_step is not None:
             self.stream.write("\n")
             self.stream.flush()

@@ -24,13 +24,14 @@ from somarm.io import atomic_save_npz, atomic_write_json
 from somarm.progress import Progress
 from somarm.protocols import BatchedTask, Learner
 from somarm.streams import trial_ids_for
-from somarm.validation import check_int
+from somarm.validation import check_int, check_memory
 
 __all__ = [
     "TASK_DEFAULTS",
     "RunConfig",
     "RunResult",
     "build",
+    "check_memory_needs",
     "build_task",
     "build_learner",
     "train",
@@ -55,6 +56,9 @@ TASK_DEFAULTS: dict[str, tuple[str, int]] = {
 }
 
 LEARNER_KINDS = ("somq", "motoric")
+
+#: Memory per trial for its random streams (generators and buffers), task and learner together.
+_STREAM_BYTES_PER_TRIAL = 4096
 
 
 @dataclass(frozen=True)
@@ -213,8 +217,32 @@ def build_learner(config: RunConfig, task: BatchedTask) -> Learner:
     )
 
 
+def check_memory_needs(configs: list[RunConfig]) -> None:
+    """Refuse, before the task or a learner is built, runs that cannot fit in memory.
+
+    A lower bound (one observation and one action dimension) for the learners, plus the learning
+    curves (two floats per block and trial) and about 4 KiB per trial for the task's and the
+    learner's random streams (measured: 20,000 reach2 trials); each learner checks its exact need
+    again when built.
+
+    Raises:
+      ValueError: one line naming the settings and the size.
+    """
+    from somarm import learners, presets
+
+    total, described = 0.0, []
+    for config in configs:
+        learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
+        what, n_bytes = learners.memory_needed(config.learner, learner_config, config.n_trials, 1, 1)
+        total += n_bytes + (16.0 * (config.n_steps // config.block) + _STREAM_BYTES_PER_TRIAL) * config.n_trials
+        described.append(what)
+    check_memory(f"{'; '.join(described)}, over {configs[0].n_steps} steps", total,
+                 "use smaller maps, fewer trials or fewer steps (or a larger --block)")
+
+
 def build(config: RunConfig) -> tuple[BatchedTask, Learner]:
     """Make the task and the learner of a (resolved) run config."""
+    check_memory_needs([config])
     task = build_task(config)
     return task, build_learner(config, task)
 
@@ -309,6 +337,7 @@ def train_group(
     if len(shared) != 1:
         raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
     first = configs[0]
+    check_memory_needs(configs)
     ids = np.concatenate([c.trial_ids_array() for c in configs])
     task = build_task(first, ids)
     learners = [build_learner(c, task) for c in configs]
@@ -470,7 +499,28 @@ def load_run(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     if isinstance(data, dict):
         data.pop("somarm_version", None)
     try:
-        config = RunConfig.from_dict(data)
+        config = RunConfig.from_dict(data).resolved()  # the same checks as `train` (a seed >= 0, ...)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{out / 'config.json'}: {exc}") from None
-    return config, learners.load_learner(out / "learner.npz")
+    learner = learners.load_learner(out / "learner.npz")
+    _check_learner_fits(config, learner, out / "learner.npz")
+    return config, learner
+
+
+def _check_learner_fits(config: RunConfig, learner: Learner, path: Path) -> None:
+    """Refuse a learner file that is not the one config.json describes (another kind, task or batch)."""
+    where = f"{path} does not belong to {path.parent / 'config.json'}"
+    if learner.kind != config.learner:
+        raise ValueError(f"{where}: it holds a {learner.kind} learner, the config says {config.learner}")
+    if learner.seed != config.seed or learner.trial_ids.tolist() != config.trial_ids_array().tolist():
+        raise ValueError(f"{where}: its seed and trials ({learner.seed}, {learner.trial_ids.tolist()}) differ "
+                         f"from the config's ({config.seed}, {config.trial_ids_array().tolist()})")
+    task = build_task(config)
+    for what, ours, theirs in (
+        ("observation", (learner.observation_low, learner.observation_high),
+         (task.observation_low, task.observation_high)),
+        ("action", (learner.action_low, learner.action_high), (task.action_low, task.action_high)),
+    ):
+        if ours[0].shape != theirs[0].shape or not all(map(np.allclose, ours, theirs)):
+            raise ValueError(f"{where}: its {what} bounds are not those of task {config.task!r} "
+                             "(a learner of another task?)")

@@ -10,6 +10,7 @@ import sys
 import textwrap
 import time
 import warnings
+from pathlib import Path
 
 import meshcat.geometry as mg
 import mujoco
@@ -170,7 +171,7 @@ _PARENT = textwrap.dedent(
     from somarm.viewer.server import MeshcatServer, stop_on_signals
     server = MeshcatServer().start()
     stop_on_signals(server)
-    print(server.process.pid, flush=True)
+    print(server.process.pid, server.log_path.parent, flush=True)
     try:
         time.sleep(60)
     except KeyboardInterrupt:
@@ -185,17 +186,36 @@ _PARENT = textwrap.dedent(
 def test_the_server_is_not_orphaned(how):
     parent = subprocess.Popen([sys.executable, "-c", _PARENT], stdout=subprocess.PIPE, text=True)
     try:
-        server_pid = int(parent.stdout.readline())
-        assert pid_alive(server_pid)
+        pid, folder = parent.stdout.readline().split()
+        server_pid, folder = int(pid), Path(folder)
+        assert pid_alive(server_pid) and folder.is_dir()
         parent.send_signal(how)
         parent.wait(timeout=10)
         assert wait_until(lambda: not pid_alive(server_pid), timeout_s=10), f"server {server_pid} orphaned"
+        assert not folder.exists(), f"{folder} left behind"
         if how == signal.SIGTERM:
             assert parent.returncode == 128 + signal.SIGTERM
     finally:
         if parent.poll() is None:
             parent.kill()
             parent.wait()
+
+
+def test_a_server_start_removes_folders_of_dead_owners(tmp_path):
+    import tempfile
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True, check=True)
+    stale = Path(tempfile.gettempdir()) / f"somarm-meshcat-{int(dead.stdout)}-test"
+    stale.mkdir()
+    (stale / "server.log").write_text("left by a SIGKILL")
+    ours = Path(tempfile.gettempdir()) / f"somarm-meshcat-{os.getpid()}-test"
+    ours.mkdir()
+    try:
+        with MeshcatServer():
+            assert not stale.exists() and ours.is_dir()  # a live owner's folder stays
+    finally:
+        ours.rmdir()
 
 
 async def _scene_messages(port: int, n_wait_s: float = 1.0) -> list[dict]:
