@@ -53,7 +53,8 @@ class Progress:
         self._period = 1.0 / rate_hz
         self._start = time.perf_counter()
         self._last = -float("inf")
-        self._next_share = _LOG_SHARE
+        self._every = max(1, round(self.total * _LOG_SHARE))  # steps between lines in a log
+        self._next_mark = self._every
         self._drawn_step: int | None = None
 
     def update(self, step: int, mean_reward: float, *, force: bool = False) -> None:
@@ -66,10 +67,10 @@ class Progress:
                 return
         elif not force:
             started = self._drawn_step is not None
-            if started and step < self._next_share * self.total and now - self._last < _LOG_PERIOD_S:
+            if started and step < self._next_mark and now - self._last < _LOG_PERIOD_S:
                 return
-            while self._next_share * self.total <= step:
-                self._next_share += _LOG_SHARE
+            while self._next_mark <= step:
+                self._next_mark += self._every
         self._last = now
         self._drawn_step = step
         filled = int(30 * step / self.total)

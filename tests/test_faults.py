@@ -127,3 +127,67 @@ def test_evaluate_and_view_of_a_damaged_run_end_in_one_line(run_folder, tmp_path
     one_error_line(somarm("evaluate", str(bad)), str(bad / "learner.npz"), "damaged")
     one_error_line(somarm("view", "reach2", "--run", str(bad), "--html", str(tmp_path / "x.html")),
                    str(bad / "learner.npz"), "damaged")
+
+
+# -- trial ids (a run of --trial-ids 7 is trial 7 everywhere) ------------------------------------
+@pytest.fixture(scope="module")
+def trial7_run(tmp_path_factory) -> tuple[Path, list[str]]:
+    from somarm import plots
+
+    out = tmp_path_factory.mktemp("trial7")
+    titles: list[str] = []
+    save = plots.save
+
+    def record(fig, path):
+        titles.extend(ax.get_title() for ax in fig.axes)
+        return save(fig, path)
+
+    plots.save = record
+    try:
+        config = training.RunConfig(task="reach2", n_trials=1, trial_ids=[7], n_steps=200, seed=2)
+        training.write_run(training.train(config, progress=False), out)
+    finally:
+        plots.save = save
+    return out, titles
+
+
+def test_figures_name_the_trial_id(trial7_run):
+    _, titles = trial7_run
+    maps = [title for title in titles if "map" in title]
+    assert len(maps) == 2 and all("(trial 7)" in title for title in maps), titles
+
+
+def test_view_takes_the_trial_id(trial7_run, tmp_path):
+    from somarm.viewer.sessions import load_session
+
+    run, _ = trial7_run
+    by_default = load_session("reach2", run=run, n_goals=3)
+    by_id = load_session("reach2", run=run, n_goals=3, trial=7)
+    np.testing.assert_array_equal(by_default.actions, by_id.actions)
+    with pytest.raises(ValueError, match=r"--trial must be one of this run's trials \(7\), got 0"):
+        load_session("reach2", run=run, n_goals=3, trial=0)
+
+
+# -- the viewer's faults ---------------------------------------------------------------------------
+def test_viewer_port_in_use_and_bad_host_are_one_line(tmp_path, capsys):
+    import socket
+
+    from somarm.cli import main
+
+    def error_line() -> str:
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("somarm: error: "), lines
+        return lines[0]
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert main(["view", "reach2", "--port", str(port), "--goals", "2"]) == 2
+        assert f"--port {port}: [Errno 98] Address already in use" in error_line()
+        out = tmp_path / "run"
+        assert main(["train", "reach2", "--view", "--port", str(port), "--out", str(out)]) == 2
+        assert "Address already in use" in error_line()
+        assert not out.exists()  # nothing ran: no empty run folder
+    assert main(["view", "reach2", "--host", "no.such.host.invalid", "--goals", "2"]) == 2
+    assert "could not start on --host no.such.host.invalid: " in error_line()

@@ -36,3 +36,21 @@ def test_license_is_an_spdx_string_with_a_setuptools_that_reads_it_and_a_license
     text = (ROOT / "LICENSE").read_text()
     assert text.startswith("MIT License") and "WITHOUT WARRANTY" in text
     assert project["project"]["license-files"] == ["LICENSE"]
+
+
+def test_the_library_on_a_headless_machine_prints_no_glfw_warning():
+    import os
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY")}
+    env["PYTHONPATH"] = str(ROOT)
+    code = ("import os; from somarm import tasks, training; "
+            "training.build(training.RunConfig(task='reach2').resolved()); print(os.environ['MUJOCO_GL'])")
+    done = subprocess.run([sys.executable, "-W", "default", "-c", code], env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "disable", done.stderr
+    assert "GLFW" not in done.stderr and "DISPLAY" not in done.stderr, done.stderr
+    env["MUJOCO_GL"] = "egl"  # a user's own choice is kept
+    done = subprocess.run([sys.executable, "-c", "import os, somarm; print(os.environ['MUJOCO_GL'])"], env=env,
+                          capture_output=True, text=True, timeout=60)
+    assert done.stdout.strip() == "egl"
