@@ -102,3 +102,14 @@ def test_an_epsilon_that_overflows_is_refused(relative):
     with pytest.raises(ValueError, match="epsilon=1e\\+308 is too large"):
         learners.make_learner("somq", config, **BOX)
     learners.make_learner("somq", SOMQConfig(epsilon=1e6, epsilon_relative=relative), **BOX)  # large but finite
+
+
+@pytest.mark.parametrize("kind", learners.KINDS)
+def test_every_kind_is_layered_and_has_presets(kind):
+    from somarm import presets
+    from somarm.learner_base import ConfigBase, LearnerBase
+
+    config_class, learner_class = learners.LEARNERS[kind]
+    assert issubclass(config_class, ConfigBase) and issubclass(learner_class, LearnerBase)
+    assert learner_class.kind == kind and learner_class.config_class is config_class
+    assert isinstance(presets.config_for(kind, "table2"), config_class)

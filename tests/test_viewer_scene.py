@@ -229,7 +229,7 @@ def test_importing_somarm_does_not_import_meshcat():
 
 
 def test_arm_show_error_is_the_tasks_reward_and_the_tip_is_mujocos_site():
-    from somarm.viewer.live import own_task
+    from somarm.viewer.feed import own_task
     from somarm.viewer.shows import show_for_task
 
     rng = np.random.default_rng(5)

@@ -1,4 +1,4 @@
-"""What every experiment shares: the run context, training through ``somarm.training``, helpers."""
+"""What every experiment shares: the run context, training through ``somarm.run``, helpers."""
 
 from __future__ import annotations
 
@@ -7,8 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from somarm import training
-from somarm.training import RunConfig, RunResult
+from somarm.run import RunConfig, RunResult, final_rewards, train_group
 
 __all__ = [
     "Context",
@@ -56,7 +55,7 @@ def run_group(
       KeyboardInterrupt: the training was stopped (Ctrl-C or SIGTERM stop it between steps); an
         experiment must not go on to draw conclusions from a partial run, so the reproduction stops.
     """
-    results = training.train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+    results = train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
     if any(result.interrupted for result in results):
         raise KeyboardInterrupt
     return results
@@ -85,7 +84,7 @@ MOTORIC_CHOICE = (
 
 def final_error(result: RunResult, window: int) -> np.ndarray:
     """Each trial's mean error (minus reward) over the last ``window`` steps, ``(n_trials,)``."""
-    return -training.final_rewards(result.block_means, result.config.block, window)
+    return -final_rewards(result.block_means, result.config.block, window)
 
 
 def typical_trial(errors: np.ndarray) -> int:

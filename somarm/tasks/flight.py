@@ -28,25 +28,25 @@ from __future__ import annotations
 
 import math
 import threading
-from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
 import numpy as np
 
 from somarm.tasks.assets import model_path
+from somarm.tasks.pool import shared_pool
 
 __all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "error_bound", "step_for", "fly", "max_steps_for",
            "ProjectileBatch", "landing_x"]
 
-#: This project's bound on the landing error of one throw, used to pick its RK4 step: half the
-#: issue's 1e-6, and about twice what the largest errors measured over Table 6's box reach.
+#: This project's bound on the landing error of one throw, used to pick its RK4 step: half of
+#: 1e-6, and about twice what the largest errors measured over Table 6's box reach.
 DEFAULT_TOLERANCE = 5e-7
 #: The steps a throw may use, largest first (round values, so that flight times of round u_y
 #: fall on whole steps, the case where interpolation error hides; the tests use random u_y).
 STEP_LADDER: tuple[float, ...] = (1.0, 0.8, 0.5, 0.4, 0.25, 0.2, 0.125, 0.1, 0.05, 0.025)
 _BOUND_FACTOR = 1.0 / (120.0 * math.e) + 1.0 / 384.0
 _CHUNK = 256
-#: Threads for batches of more than one chunk (this machine has 2 cores); see ``tasks.set_threads``.
+#: Threads for batches of more than one chunk (2 by default: a small machine); see ``tasks.set_threads``.
 THREADS = 2
 
 
@@ -200,8 +200,6 @@ class ProjectileBatch:
 
 
 _local = threading.local()
-_pools: dict[int, ThreadPoolExecutor] = {}
-_pools_lock = threading.Lock()
 
 
 def _batch_for_thread(n: int, G: float) -> ProjectileBatch:
@@ -258,10 +256,7 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
     if workers == 1:
         _run_chunks(chunks, flat, out, G, size)
     else:
-        with _pools_lock:
-            if workers not in _pools:
-                _pools[workers] = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="somarm-flight")
-            pool = _pools[workers]
+        pool = shared_pool(workers)
         # Interleave so that every thread gets short and long flights alike.
         futures = [pool.submit(_run_chunks, chunks[w::workers], flat, out, G, size)
                    for w in range(workers)]
