@@ -81,6 +81,9 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
         (["view", "reach2", "--bogus"], "unrecognized arguments: --bogus"),
         (["view", "reach2", "--goals", "100000"], "--goals must be at most 200"),
         (["view", "reach2", "--html", "."], "--html takes a file name, got a folder"),
+        (["train", "reach2", "--steps", "50", "--block", "100"], "--block 100 is more than --steps 50"),
+        (["train", "reach2", "--steps", "150", "--block", "100"],
+         "--steps 150 is not a whole number of --block 100: the last 50 steps would be left out"),
     ],
 )
 def test_bad_input_is_one_clear_line(args, expected, capsys, tmp_path, monkeypatch):

@@ -44,8 +44,8 @@ def test_the_library_on_a_headless_machine_prints_no_glfw_warning():
 
     env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY")}
     env["PYTHONPATH"] = str(ROOT)
-    code = ("import os; from somarm import tasks, training; "
-            "training.build(training.RunConfig(task='reach2').resolved()); print(os.environ['MUJOCO_GL'])")
+    code = ("import os; from somarm import run; "
+            "run.make(run.RunConfig(task='reach2').resolved()); print(os.environ['MUJOCO_GL'])")
     done = subprocess.run([sys.executable, "-W", "default", "-c", code], env=env, capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 0 and done.stdout.strip() == "disable", done.stderr
