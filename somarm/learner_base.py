@@ -45,15 +45,12 @@ def memory_needed(kind: str, config: Any, n_trials: int, obs_dim: int, action_di
     Counts the grid-distance matrices (built through a ``(units, units, grid dims)`` difference)
     and, per trial, the weights and Q (SOM-Q) or unit values (Motoric Map).
     """
-    own_action_map = hasattr(config, "action_shape")  # SOM-Q; the Motoric Map's actions sit on its input map
-    n_s = int(np.prod(config.input_shape))
-    n_a = int(np.prod(config.action_shape)) if own_action_map else n_s
-    n_floats = n_s * n_s * (len(config.input_shape) + 1)
-    shapes = f"input_shape={'x'.join(map(str, config.input_shape))}"
-    if own_action_map:
-        n_floats += n_a * n_a * (len(config.action_shape) + 1)
-        shapes += f", action_shape={'x'.join(map(str, config.action_shape))}"
-    n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + (n_s * n_a if own_action_map else n_s))
+    maps = [name for name in ("input_shape", "action_shape") if hasattr(config, name)]  # Motoric: input only
+    units = [int(np.prod(getattr(config, name))) for name in maps]
+    n_s, n_a = units[0], units[-1]
+    n_floats = sum(n * n * (len(getattr(config, name)) + 1) for n, name in zip(units, maps, strict=True))
+    n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + (n_s * n_a if len(maps) == 2 else n_s))
+    shapes = ", ".join(f"{name}={'x'.join(map(str, getattr(config, name)))}" for name in maps)
     return f"a {kind} learner with {shapes} and {n_trials} trial(s)", 8.0 * n_floats
 
 
@@ -274,17 +271,14 @@ class LearnerBase(abc.ABC):
 
     def _check_sizes(self) -> None:
         """Refuse, before allocating, maps that do not fit in memory and an epsilon that overflows."""
-        config = self.config
-        check_memory(*memory_needed(self.kind, config, self.n_trials, self.obs_dim, self.action_dim),
+        check_memory(*memory_needed(self.kind, self.config, self.n_trials, self.obs_dim, self.action_dim),
                      "use smaller maps or fewer trials")
-        epsilon = config.epsilon
-        largest = max(epsilon.scale, epsilon.floor)
-        span = (self.action_high - self.action_low) if config.epsilon_relative else 1.0
-        with np.errstate(over="ignore"):
-            reach = largest * np.max(span) * 4.0 + np.max(np.abs([self.action_low, self.action_high]))
-        if not np.isfinite(reach):
-            raise ValueError(f"epsilon={largest:g} is too large: a perturbed action overflows; "
-                             "give a number of the size of the action range")
+        largest = max(self.config.epsilon.scale, self.config.epsilon.floor)
+        span = np.max(self.action_high - self.action_low) if self.config.epsilon_relative else 1.0
+        with np.errstate(over="ignore"):  # a perturbed action: up to a few epsilons from a bound
+            if not np.isfinite(largest * span * 4.0 + np.max(np.abs([self.action_low, self.action_high]))):
+                raise ValueError(f"epsilon={largest:g} is too large: a perturbed action overflows; "
+                                 "give a number of the size of the action range")
 
     @staticmethod
     def _grid(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:

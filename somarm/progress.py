@@ -12,11 +12,24 @@ import sys
 import time
 from typing import TextIO
 
-__all__ = ["Progress"]
+__all__ = ["Progress", "end_line"]
 
 #: Away from a terminal: one line per this share of the run, or per this many seconds.
 _LOG_SHARE = 0.1
 _LOG_PERIOD_S = 60.0
+
+
+#: The bar whose line is open on a terminal (drawn without its newline yet), if any.
+_open_bar: Progress | None = None
+
+
+def end_line() -> None:
+    """End an open progress line, so that a message printed next starts on a line of its own."""
+    global _open_bar
+    if _open_bar is not None:
+        _open_bar.stream.write("\n")
+        _open_bar.stream.flush()
+        _open_bar = None
 
 
 def _is_terminal(stream: TextIO) -> bool:
@@ -78,6 +91,9 @@ class Progress:
         text = f"{self.label} [{bar}] {step}/{self.total}  mean reward {mean_reward:+.4f}  {now - self._start:6.1f} s"
         self.stream.write(f"\r{text}" if self.terminal else f"{text}\n")
         self.stream.flush()
+        if self.terminal:
+            global _open_bar
+            _open_bar = self
 
     def close(self, step: int, mean_reward: float) -> None:
         """Draw the final state (unless it is already the last line drawn) and end the line."""
@@ -85,6 +101,5 @@ class Progress:
             return
         if self._drawn_step != step:
             self.update(step, mean_reward, force=True)
-        if self.terminal and self._drawn_step is not None:
-            self.stream.write("\n")
-            self.stream.flush()
+        if self.terminal and _open_bar is self:
+            end_line()

@@ -39,3 +39,18 @@ def test_a_terminal_redraws_in_place_and_ends_the_line_once():
     bar.close(10, 0.0)
     text = tty.getvalue()
     assert text.count("\r") == 10 and text.endswith("\n") and text.count("\n") == 1
+
+
+def test_a_message_after_an_open_bar_starts_on_its_own_line():
+    from somarm.progress import end_line
+
+    tty = _Terminal()
+    bar = Progress(10, stream=tty, rate_hz=1e9)
+    bar.update(5, 0.0)
+    end_line()  # what the viewer does before it warns
+    tty.write("warning\n")
+    bar.update(10, 0.0)
+    bar.close(10, 0.0)
+    lines = tty.getvalue().split("\n")
+    assert lines[1] == "warning" and lines[0].startswith("\r") and lines[2].startswith("\r")
+    assert tty.getvalue().endswith("\n") and not tty.getvalue().endswith("\n\n")
