@@ -323,3 +323,21 @@ def test_a_second_signal_does_not_cut_the_final_write_short(tmp_path, second):
     assert {"learner.npz", "config.json", "curves.npz", "learning_curve.png", "input_map.png",
             "action_map.png"} <= {p.name for p in out.iterdir()}
     run.load(out)
+
+
+def test_reproduce_keeps_the_finished_experiments_when_a_figure_cannot_be_written(tmp_path, monkeypatch):
+    from somarm.reproduce import runner
+    from somarm.reproduce.report import Section
+
+    def finished(ctx):
+        return Section(name="first", title="the first experiment")
+
+    def disk_full(ctx):
+        raise ValueError(f"cannot write {ctx.out_dir / 'figures' / 'fig9.png'}: No space left on device")
+
+    monkeypatch.setattr(runner, "EXPERIMENTS", {"first": finished, "second": disk_full})
+    with pytest.raises(ValueError, match="fig9.png: No space left on device; second stopped, the report keeps "
+                                         r"the 1 experiment\(s\) that finished"):
+        runner.reproduce(tmp_path, quick=True, progress=False)
+    claims = runner.load_claims(tmp_path)
+    assert claims["complete"] is False and list(claims["experiments"]) == ["first"]
