@@ -47,7 +47,6 @@ def _cmd_presets(args) -> int:
 def _cmd_train(args) -> int:
     from somarm import run
     from somarm.run_folder import claim
-    from somarm.stopping import signals_deferred, sigterm_as_interrupt
 
     if args.port is not None and not 0 <= args.port <= 65535:
         raise ValueError(f"--port must be in 0..65535, got {args.port}")
@@ -55,8 +54,19 @@ def _cmd_train(args) -> int:
     group = run.RunGroup([config])  # built once: a bad preset, --set or --task-set fails before any output
     out = _out_folder(args.out, f"runs/{config.task}__{config.learner}__seed{config.seed}")
     owner = claim(out, force=args.force)  # one writer per folder; earlier results only with --force
+    try:
+        return _train_into(out, group, args, owner)
+    finally:
+        owner.release()
+
+
+def _train_into(out: Path, group, args, owner) -> int:
+    """Train a built run group of one config into the claimed folder ``out``; the exit status."""
+    from somarm import run
+    from somarm.stopping import signals_deferred, sigterm_as_interrupt
+
+    config = group.configs[0]
     sigterm_as_interrupt()
-    hook = None
     view = None
     if args.view:
         from somarm.viewer.live import LiveView
@@ -69,15 +79,17 @@ def _cmd_train(args) -> int:
             reason = _first_line(exc).split(" did not start: ")[-1]
             raise ValueError(f"the viewer could not start on {where}: {reason}") from None
         print(f"viewer: {view.url}", flush=True)
-        hook = view.update
     try:
-        result = group.train(progress=not args.no_progress, on_step=hook)[0]
-    finally:
+        result = group.train(progress=not args.no_progress, on_step=None if view is None else view.update)[0]
+    except BaseException:
         if view is not None:
             view.close()
+        raise
     try:
         # A second Ctrl-C or SIGTERM waits until the run is written (it then still ends the command).
         with signals_deferred():
+            if view is not None:
+                view.close()
             extra = run.greedy_summary(result)  # the run is written whatever happens here
             if "greedy_error" in extra:
                 print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
@@ -85,8 +97,6 @@ def _cmd_train(args) -> int:
     except KeyboardInterrupt:
         print(f"interrupted after step {result.steps_done}: results written to {out}", file=sys.stderr)
         return 130
-    finally:
-        owner.release()
     if result.interrupted:
         print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
         return 130

@@ -151,8 +151,17 @@ def test_bad_input_leaves_no_output_folder(tmp_path, capsys):
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
-def test_a_run_shorter_than_one_block_writes_valid_json(tmp_path):
-    assert main(["train", "reach2", "--steps", "50", "--no-progress", "--out", str(tmp_path)]) == 0
+def test_a_run_stopped_before_one_block_writes_valid_json(tmp_path):
+    # --steps shorter than a --block is refused; a run stopped inside its first block is not.
+    from somarm import run
+
+    def stop_at_50(step, observations, actions, rewards):
+        if step == 50:
+            raise KeyboardInterrupt
+
+    result = run.train(run.RunConfig(task="reach2", n_steps=200), progress=False, on_step=stop_at_50)
+    run.write(result, tmp_path, extra_summary=run.greedy_summary(result))
+
     def no_nan(constant):
         raise AssertionError(f"summary.json holds {constant}, which is not JSON")
 
