@@ -2,6 +2,8 @@
 
 Data flows one way each step: ``task.reset() -> observations -> learner.act -> actions ->
 task.step (physics) -> rewards -> learner.learn``. The loop holds both ends and passes arrays.
+A multi-step task (``task.episodic``) also hands the learner each trial's next observation and
+whether its episode ended at the goal; its ``reset()`` restarts only the finished episodes.
 Building the task and learners, and writing the results, belong to ``somarm.run``.
 """
 
@@ -81,6 +83,7 @@ def loop(
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in learners]
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
+    episodic = bool(getattr(task, "episodic", False))  # multi-step episodes (reach2_obstacle)
     start = time.perf_counter()
     step = 0
     interrupted = False
@@ -92,7 +95,10 @@ def loop(
                     actions[part] = learner.act(observations[part])
                 rewards = task.step(actions)
                 for learner, part in zip(learners, parts, strict=True):
-                    learner.learn(rewards[part])
+                    if episodic:  # the next state and whether the episode ended there
+                        learner.learn(rewards[part], task.next_observations[part], task.terminal[part])
+                    else:
+                        learner.learn(rewards[part])
                 accumulated += rewards
                 accumulated_sq += rewards * rewards
                 step += 1
