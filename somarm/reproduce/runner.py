@@ -70,6 +70,10 @@ def reproduce(
             )
             status = 130
             break
+        except ValueError as exc:  # a figure that cannot be written (a full disk): keep the report so far
+            _keep_report(out, sections, quick=quick, seed=seed, total=time.perf_counter() - start)
+            raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
+                             "experiment(s) that finished") from None
         section.wall_time_s = time.perf_counter() - began
         sections.append(section)
         print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
@@ -80,6 +84,14 @@ def reproduce(
     claims = sum(len(s.claims) for s in sections)
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold; {total:.1f} s)")
     return status
+
+
+def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
+    """Write the report of the finished experiments, if there is room for it (best effort)."""
+    try:
+        _write(out, sections, complete=False, **kwargs)
+    except ValueError:
+        pass  # the report of the previous experiment stays as it was
 
 
 def _write(
