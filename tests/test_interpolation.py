@@ -193,7 +193,8 @@ def test_cli_trains_views_and_rejects_an_unknown_response(tmp_path, capsys):
     assert main(["view", "reach2", "--run", str(run), "--html", str(page), "--goals", "3"]) == 0
     assert page.stat().st_size > 1000
     capsys.readouterr()
-    assert main(["train", "reach2", "--set", "response=nearest", "--steps", "10", "--no-progress"]) == 2
+    assert main(["train", "reach2", "--set", "response=nearest", "--steps", "10", "--block", "10",
+                 "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("somarm: error:") and "response must be one of winner, interpolated" in err
     assert len(err.splitlines()) == 1
