@@ -12,7 +12,7 @@ from pathlib import Path
 from somarm import __version__
 from somarm.compare import peers_missing
 from somarm.io import atomic_write_json, atomic_write_text
-from somarm.reproduce import arms, delayed, peers, throws
+from somarm.reproduce import arms, beyond, delayed, peers, throws
 from somarm.reproduce.common import Context
 from somarm.reproduce.report import Section, render
 
@@ -28,6 +28,8 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "neighbourhood_q": throws.neighbourhood_q,
     "more_inputs": throws.more_inputs,
     "delayed_reward": delayed.delayed_reward,
+    # Not the paper's: its suggested continuous response (issue 11), apart from the paper's claims.
+    "beyond": beyond.beyond,
 }
 
 #: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
@@ -74,6 +76,10 @@ def reproduce(
             )
             status = 130
             break
+        except ValueError as exc:  # a figure that cannot be written (a full disk): keep the report so far
+            _keep_report(out, sections, quick=quick, seed=seed, total=time.perf_counter() - start)
+            raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
+                             "experiment(s) that finished") from None
         section.wall_time_s = time.perf_counter() - began
         sections.append(section)
         print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
@@ -84,6 +90,14 @@ def reproduce(
     claims = sum(len(s.claims) for s in sections)
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold; {total:.1f} s)")
     return status
+
+
+def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
+    """Write the report of the finished experiments, if there is room for it (best effort)."""
+    try:
+        _write(out, sections, complete=False, **kwargs)
+    except ValueError:
+        pass  # the report of the previous experiment stays as it was
 
 
 def _write(
