@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
@@ -23,13 +22,14 @@ class LauncherPhysics(dm_mujoco.Physics):
                 np.array([model.jnt_dofadr[model.name2id("height", "joint")]]))
 
     def set_conditions(self, *, Fr: float, W: float, M: float) -> None:
-        """Drag Fr (joint damping and the wind motor's gear), wind W (its control) and mass M."""
-        self.named.model.dof_damping["x"] = Fr
-        self.named.model.actuator_gear["wind", 0] = -Fr
+        """Drag Fr, wind W (the wind motor's control) and mass M of the next launch.
+
+        The projectile keeps unit mass: M enters only through the drag rate Fr / M (gravity's
+        acceleration does not depend on it), as in the batched flights. ``launch`` turns that
+        rate, times its step, into the joint damping and the wind motor's gear.
+        """
+        self._rate = Fr / M
         self.named.data.ctrl["wind"] = W
-        if self.named.model.body_mass["projectile"] != M:
-            self.named.model.body_mass["projectile"] = M
-            mujoco.mj_setConst(self.model.ptr, self.data.ptr)  # the cached mass must follow
 
     def set_target(self, X: float) -> None:
         self.named.data.mocap_pos["target", 0] = X
@@ -42,29 +42,41 @@ class LauncherPhysics(dm_mujoco.Physics):
         return np.array([self.named.data.qpos["x"], self.named.data.qpos["height"]]).ravel()
 
     def launch(self, ux: float, uy: float, *, step: float) -> tuple[np.ndarray, np.ndarray]:
-        """Put the projectile at the origin with velocity (ux, uy); returns the launch (qpos, qvel)."""
-        self.model.opt.timestep = step
+        """Put the projectile at the origin with velocity (ux, uy), to fly with RK4 step ``step``.
+
+        The flight runs in the model's scaled time (``flight`` module docstring): model step
+        ``flight.SCALED_STEP``, drag rate ``step Fr / M``, launch velocity ``(ux, uy / step)``.
+
+        Returns:
+          The launch ``(qpos, qvel)`` (scaled).
+        """
+        rate = step * self._rate
+        self._scale = step
+        self.named.model.dof_damping["x"] = rate
+        self.named.model.actuator_gear["wind", 0] = -rate
+        self.model.opt.timestep = flight.SCALED_STEP
         self.data.time = 0.0
         self.data.qpos[:] = 0.0
         self.data.qvel[:] = 0.0
         self.named.data.qvel["x"] = ux
-        self.named.data.qvel["height"] = uy
+        self.named.data.qvel["height"] = uy / step
         return self.data.qpos.copy(), self.data.qvel.copy()
 
     def fly(self, *, previous=None, history: bool = False):
-        """Step until the projectile is back at height 0; see ``flight.fly``."""
+        """Step until the projectile is back at height 0; see ``flight.fly`` (real x, height, time)."""
         x, z = self._dofs()
         steps = flight.max_steps_for(float(np.max(self.data.qvel[z])) if previous is None else
                                      float(previous[1][z].max()), G=-float(self.model.opt.gravity[2]),
                                      dt=float(self.model.opt.timestep))
         return flight.fly(self.model.ptr, self.data.ptr, x=x, z=z, max_steps=steps, previous=previous,
-                          history=history)
+                          history=history, scale=getattr(self, "_scale", 1.0))
 
 
 def load_physics(params: ThrowParams = TABLE3) -> LauncherPhysics:
-    """The launcher physics with the gravity of ``params``."""
+    """The launcher physics with the gravity, drag, wind and mass of ``params``."""
     physics = LauncherPhysics.from_xml_path(str(model_path("launcher")))
     physics.model.opt.gravity[:] = (0.0, 0.0, -params.G)
+    physics.set_conditions(Fr=params.Fr, W=params.W, M=params.M)
     return physics
 
 

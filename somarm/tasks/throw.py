@@ -187,10 +187,20 @@ class Throw(OneStepTask):
         candidates all miss (probability about 1e-44 for Table 6) keeps its first candidate
         with X pulled back to the farthest reachable landing.
         """
-        ok = self.reachable(candidates)
-        first = np.argmax(ok, axis=1)
-        chosen = candidates[np.arange(len(candidates)), first].copy()
-        missed = ~ok.any(axis=1)
+        n = len(candidates)
+        first = np.zeros(n, dtype=np.intp)
+        missed = np.ones(n, dtype=bool)
+        pending = np.arange(n)
+        # Column by column, only for the rows still without a reachable candidate: nearly every
+        # row is settled by its first candidate, so the reach is rarely computed more than once.
+        for column in range(candidates.shape[1]):
+            ok = self.reachable(candidates[pending, column])
+            first[pending[ok]] = column
+            missed[pending[ok]] = False
+            pending = pending[~ok]
+            if pending.size == 0:
+                break
+        chosen = candidates[np.arange(n), first].copy()
         if missed.any():
             c = self.conditions(chosen[missed])
             _, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
