@@ -71,7 +71,8 @@ THREADS = 2
 
 def error_bound(ux, W, k, step) -> np.ndarray:
     """Leading-order bound on the simulated landing error: ``|ux + W| k^3 h^4 (1/(120 e) + 1/384)``."""
-    return np.abs(np.asarray(ux) + W) * np.asarray(k) ** 3 * np.asarray(step) ** 4 * _BOUND_FACTOR
+    k = np.asarray(k)
+    return np.abs(np.asarray(ux) + W) * (k * k * k) * _BOUND_FACTOR * np.asarray(step) ** 4
 
 
 def step_for(ux, W, k, *, tolerance: float = DEFAULT_TOLERANCE) -> np.ndarray:
@@ -84,9 +85,12 @@ def step_for(ux, W, k, *, tolerance: float = DEFAULT_TOLERANCE) -> np.ndarray:
     Returns:
       Steps of the broadcast shape.
     """
+    if all(isinstance(a, float) for a in (ux, W, k)):  # one throw (the dm_env path): no arrays
+        base = abs(ux + W) * (k * k * k) * _BOUND_FACTOR
+        return np.float64(next((h for h in STEP_LADDER if base * h ** 4 <= tolerance), STEP_LADDER[-1]))
     ux, W, k = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, W, k)))
-    # error_bound(h) = base * h^4 grows with h: the largest admissible step is the first that fits.
-    base = error_bound(ux, W, k, 1.0)
+    # The bound is base * h^4, so the largest admissible step is the first of the ladder that fits.
+    base = np.abs(ux + W) * (k * k * k) * _BOUND_FACTOR
     step = np.full(ux.shape, STEP_LADDER[-1])
     for h in reversed(STEP_LADDER[:-1]):
         step = np.where(base * h ** 4 <= tolerance, h, step)

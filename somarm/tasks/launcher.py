@@ -17,9 +17,13 @@ class LauncherPhysics(dm_mujoco.Physics):
     """dm_control physics of ``models/launcher.xml`` with noun accessors."""
 
     def _dofs(self) -> tuple[np.ndarray, np.ndarray]:
-        model = self.model
-        return (np.array([model.jnt_dofadr[model.name2id("x", "joint")]]),
-                np.array([model.jnt_dofadr[model.name2id("height", "joint")]]))
+        """dof addresses of the slide joints ``x`` and ``height``, each of shape ``(1,)``."""
+        cached = getattr(self, "_dof_cache", None)
+        if cached is None or cached[0] is not self.model.ptr:
+            model = self.model
+            cached = self._dof_cache = (model.ptr, np.array([model.jnt_dofadr[model.name2id("x", "joint")]]),
+                                        np.array([model.jnt_dofadr[model.name2id("height", "joint")]]))
+        return cached[1], cached[2]
 
     def set_conditions(self, *, Fr: float, W: float, M: float) -> None:
         """Drag Fr, wind W (the wind motor's control) and mass M of the next launch.
@@ -52,23 +56,28 @@ class LauncherPhysics(dm_mujoco.Physics):
         """
         rate = step * self._rate
         self._scale = step
-        self.named.model.dof_damping["x"] = rate
-        self.named.model.actuator_gear["wind", 0] = -rate
-        self.model.opt.timestep = flight.SCALED_STEP
-        self.data.time = 0.0
-        self.data.qpos[:] = 0.0
-        self.data.qvel[:] = 0.0
-        self.named.data.qvel["x"] = ux
-        self.named.data.qvel["height"] = uy / step
-        return self.data.qpos.copy(), self.data.qvel.copy()
+        (x,), (z,) = self._dofs()
+        model, data = self.model.ptr, self.data.ptr  # raw arrays: this runs once per dm_env episode
+        model.dof_damping[x] = rate
+        model.actuator_gear[self._wind_actuator(), 0] = -rate
+        model.opt.timestep = flight.SCALED_STEP
+        data.time = 0.0
+        data.qpos[:] = 0.0
+        data.qvel[:] = 0.0
+        data.qvel[x] = ux
+        data.qvel[z] = uy / step
+        return data.qpos.copy(), data.qvel.copy()
+
+    def _wind_actuator(self) -> int:
+        return self.model.name2id("wind", "actuator")
 
     def fly(self, *, previous=None, history: bool = False):
         """Step until the projectile is back at height 0; see ``flight.fly`` (real x, height, time)."""
         x, z = self._dofs()
-        steps = flight.max_steps_for(float(np.max(self.data.qvel[z])) if previous is None else
-                                     float(previous[1][z].max()), G=-float(self.model.opt.gravity[2]),
-                                     dt=float(self.model.opt.timestep))
-        return flight.fly(self.model.ptr, self.data.ptr, x=x, z=z, max_steps=steps, previous=previous,
+        model, data = self.model.ptr, self.data.ptr
+        steps = flight.max_steps_for(float(data.qvel[z[0]]) if previous is None else float(previous[1][z[0]]),
+                                     G=-float(model.opt.gravity[2]), dt=float(model.opt.timestep))
+        return flight.fly(model, data, x=x, z=z, max_steps=steps, previous=previous,
                           history=history, scale=getattr(self, "_scale", 1.0))
 
 
@@ -129,7 +138,8 @@ class ThrowEnvTask(OneStepEnvTask):
     def apply_action(self, physics: LauncherPhysics, action: np.ndarray) -> None:
         c = self._conditions
         self._velocity = (float(action[0]), float(action[1]))
-        step = float(flight.step_for(action[0], c["W"], c["Fr"] / c["M"], tolerance=self.batched.params.tolerance))
+        step = float(flight.step_for(self._velocity[0], c["W"], c["Fr"] / c["M"],
+                                     tolerance=self.batched.params.tolerance))
         self._launch = physics.launch(*self._velocity, step=step)
 
     def reward_from_physics(self, physics: LauncherPhysics, observation: np.ndarray) -> float:
