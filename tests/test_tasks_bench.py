@@ -18,7 +18,7 @@ def test_quick_benchmark_prints_a_row_per_task(capsys, tmp_path):
     assert float(rows["reach2"][4]) <= 1e-9  # the fingertip error column
     figures = json.loads((tmp_path / "bench.json").read_text())["tasks"]
     assert set(figures) == {"reach2", "throw"}
-    for name, f in figures.items():
+    for f in figures.values():
         assert {"mujoco_per_s", "step100_ms", "step20_ms", "dm_env_us"} <= set(f)
         assert all(f[key] > 0 for key in ("mujoco_per_s", "step100_ms", "step20_ms", "dm_env_us"))
         # The printed ratio is the step's cost per evaluation over the large batch's.

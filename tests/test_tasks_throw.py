@@ -174,7 +174,7 @@ def test_chunks_cover_the_sorted_batch_in_order_and_respect_the_size():
         bounds = flight._partition(lengths, size)
         assert bounds[0][0] == 0 and bounds[-1][1] == n
         assert all(a < b <= a + size for a, b in bounds)
-        assert all(b == a2 for (_, b), (a2, _) in zip(bounds, bounds[1:]))
+        assert all(b == a2 for (_, b), (a2, _) in zip(bounds, bounds[1:], strict=False))
     # Large batches use (nearly) full chunks; a small one is cut into a few chunks of similar flights.
     sizes = np.diff(np.array(flight._partition(np.sort(rng.uniform(0, 160, 3000)), 256)), axis=1)
     assert sizes[sizes >= 200].sum() >= 0.8 * 3000
