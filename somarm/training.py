@@ -291,35 +291,55 @@ def train_group(
     label: str | None = None,
     snapshots_at: tuple[int, ...] = (),
 ) -> list[RunResult]:
-    """Train several learners in lockstep on one task, with one physics call per step for all.
+    """Train several learners in lockstep, with one physics call per step for all.
 
-    The configs may differ only in their learner settings (learner, preset, overrides, trials);
-    they share task, task parameters, backend, seed, steps and block. Each config's trials see the
-    same observations and random numbers as when trained alone, so results equal ``train``'s.
-    Comparisons (Figs. 13, 21-24) run this way: the physics, not the learner, dominates their cost.
+    The configs share backend, seed, steps and block. Configs of one task and task parameters
+    share one batched task (they may differ in learner, preset, overrides and trials); configs of
+    different tasks get one task each, stepped together by ``tasks.base.step_together`` (one
+    batch of flights for several throw tasks). Each config's trials see the same observations and
+    random numbers as when trained alone, so results equal ``train``'s. Comparisons (Figs. 13,
+    21-24) and Fig. 25's four experiments run this way: the physics dominates their cost.
 
     Returns:
-      One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays.
+      One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays (only for
+      a group on one task).
+
+    Raises:
+      ValueError: the configs differ in backend, seed, steps or block, or ``on_step`` is given for
+        a group of several tasks.
     """
+    from somarm.tasks.base import step_together
+
     configs = [c.resolved() for c in configs]
-    shared = {
-        (c.task, json.dumps(c.task_params, sort_keys=True), c.backend, c.seed, c.n_steps, c.block)
-        for c in configs
-    }
-    if len(shared) != 1:
-        raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
+    if len({(c.backend, c.seed, c.n_steps, c.block) for c in configs}) != 1:
+        raise ValueError("a group shares backend, seed, steps and block; these differ")
+    keys = [(c.task, json.dumps(c.task_params, sort_keys=True)) for c in configs]
+    distinct = list(dict.fromkeys(keys))
+    if len(distinct) > 1 and on_step is not None:
+        raise ValueError("on_step needs a group on one task")
     first = configs[0]
-    ids = np.concatenate([c.trial_ids_array() for c in configs])
-    task = build_task(first, ids)
-    learners = [build_learner(c, task) for c in configs]
-    bounds = np.cumsum([0] + [c.n_trials for c in configs])
-    parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    tasks = []
+    for key in distinct:
+        members = [c for c, k in zip(configs, keys, strict=True) if k == key]
+        tasks.append(build_task(members[0], np.concatenate([c.trial_ids_array() for c in members])))
+    # Each config owns a slice of its task's trials and a slice of the group's columns.
+    owner, parts, columns = [], [], []
+    offsets = np.cumsum([0] + [t.n_trials for t in tasks])
+    filled = [0] * len(tasks)
+    for key, config in zip(keys, configs, strict=True):
+        i = distinct.index(key)
+        parts.append(slice(filled[i], filled[i] + config.n_trials))
+        columns.append(slice(offsets[i] + filled[i], offsets[i] + filled[i] + config.n_trials))
+        owner.append(i)
+        filled[i] += config.n_trials
+    learners = [build_learner(c, tasks[i]) for c, i in zip(configs, owner, strict=True)]
+    n_all = int(offsets[-1])
     n_blocks = first.n_steps // first.block
-    block_means = np.zeros((n_blocks, len(ids)))
-    block_sq_means = np.zeros((n_blocks, len(ids)))
-    accumulated = np.zeros(len(ids))
-    accumulated_sq = np.zeros(len(ids))
-    actions = np.empty((len(ids), task.action_low.size))
+    block_means = np.zeros((n_blocks, n_all))
+    block_sq_means = np.zeros((n_blocks, n_all))
+    accumulated = np.zeros(n_all)
+    accumulated_sq = np.zeros(n_all)
+    actions = [np.empty((t.n_trials, t.action_low.size)) for t in tasks]
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in configs]
     bar = Progress(first.n_steps, label=label or f"{first.task}/{first.learner}", enabled=progress)
     last_mean = float("nan")
@@ -329,17 +349,18 @@ def train_group(
     with _stop_between_steps() as stop:
         try:
             while step < first.n_steps:
-                observations = task.reset()
-                for learner, part in zip(learners, parts, strict=True):
-                    actions[part] = learner.act(observations[part])
-                rewards = task.step(actions)
-                for learner, part in zip(learners, parts, strict=True):
-                    learner.learn(rewards[part])
+                observations = [task.reset() for task in tasks]
+                for learner, i, part in zip(learners, owner, parts, strict=True):
+                    actions[i][part] = learner.act(observations[i][part])
+                rewards_of = step_together(tasks, actions)
+                for learner, i, part in zip(learners, owner, parts, strict=True):
+                    learner.learn(rewards_of[i][part])
+                rewards = rewards_of[0] if len(tasks) == 1 else np.concatenate(rewards_of)
                 accumulated += rewards
                 accumulated_sq += rewards * rewards
                 step += 1
                 if on_step is not None:
-                    on_step(step, observations, actions, rewards)
+                    on_step(step, observations[0], actions[0], rewards)
                 if step % first.block == 0:
                     index = step // first.block - 1
                     block_means[index] = accumulated / first.block
@@ -360,8 +381,8 @@ def train_group(
     bar.close(step, last_mean)
     done = step // first.block
     results = []
-    for config, learner, part, taken in zip(configs, learners, parts, snapshots, strict=True):
-        own_task = task if len(configs) == 1 else build_task(config)
+    for config, learner, column, taken in zip(configs, learners, columns, snapshots, strict=True):
+        own_task = tasks[0] if len(configs) == 1 else build_task(config)
         if hasattr(own_task, "set_step"):
             own_task.set_step(step)  # its phase (four_goals) is the one the learner reached
         results.append(
@@ -369,8 +390,8 @@ def train_group(
                 config=config,
                 learner=learner,
                 task=own_task,
-                block_means=block_means[:done, part].copy(),
-                block_sq_means=block_sq_means[:done, part].copy(),
+                block_means=block_means[:done, column].copy(),
+                block_sq_means=block_sq_means[:done, column].copy(),
                 steps_done=step,
                 wall_time=wall_time,
                 interrupted=interrupted,

@@ -415,9 +415,8 @@ def more_inputs(ctx: Context) -> Section:
         "C": ("throw_friction", "table7"),
         "D": ("throw_mass", "table7"),
     }
-    results = {}
-    for label, (task, preset) in experiments.items():
-        config = RunConfig(
+    configs = [
+        RunConfig(
             task=task,
             preset=preset,
             n_trials=n_trials,
@@ -425,7 +424,10 @@ def more_inputs(ctx: Context) -> Section:
             seed=ctx.seed,
             task_params={"punish_low": True},
         )
-        results[label] = run(ctx, f"Fig 25 {label} {task}", config)
+        for task, preset in experiments.values()
+    ]
+    # In lockstep: the four tasks' throws fly in one batch per step (results equal separate runs).
+    results = dict(zip(experiments, run_group(ctx, "Fig 25 A-D", configs), strict=True))
     section = Section("more_inputs", "Fig. 25: more varied inputs, experiments A-D (Tables 6 and 7)")
     finals = {k: final_error(r, 100) for k, r in results.items()}
     mean = {k: float(v.mean()) for k, v in finals.items()}

@@ -207,6 +207,29 @@ class Throw(OneStepTask):
             chosen[missed, 0] = np.minimum(chosen[missed, 0], highest)
         return chosen
 
+    @classmethod
+    def rewards_together(cls, tasks: list[Throw], steps: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+        """Rewards of several throw tasks from one batch of flights (one gravity, tolerance and backend)."""
+        first = tasks[0]
+        if any((t.backend, t.params.G, t.params.tolerance) != (first.backend, first.params.G, first.params.tolerance)
+               for t in tasks):
+            return super().rewards_together(tasks, steps)
+        conditions = [t.conditions(o) for t, (o, _) in zip(tasks, steps, strict=True)]
+        shapes = [a.shape[:-1] for _, a in steps]
+        flat = {key: np.concatenate([np.broadcast_to(c[key], shape).ravel() for c, shape in zip(conditions, shapes,
+                                                                                                 strict=True)])
+                for key in ("Fr", "W", "M")}
+        ux = np.concatenate([a[..., 0].ravel() for _, a in steps])
+        uy = np.concatenate([a[..., 1].ravel() for _, a in steps])
+        landing = landing_x(ux, uy, params=first.params, backend=first.backend, **flat)
+        rewards, start = [], 0
+        for task, c, (_, a), shape in zip(tasks, conditions, steps, shapes, strict=True):
+            size = int(np.prod(shape))
+            rewards.append(throw_rewards(landing[start:start + size].reshape(shape), c["X"], a[..., 0], a[..., 1],
+                                         punish_low=task.params.punish_low))
+            start += size
+        return rewards
+
     def rewards(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
         c = self.conditions(observations)
         ux, uy = actions[..., 0], actions[..., 1]
