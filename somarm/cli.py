@@ -155,11 +155,14 @@ def _cmd_evaluate(args) -> int:
 
 def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
+    from somarm.validation import check_int
 
     runner.check_names(args.only)
+    check_int("seeds", args.seeds)
     out = _check_writable(Path(args.out))
     _stop_on_sigterm()
-    return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
+    return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress,
+                            seeds=args.seeds, backend=args.backend)
 
 
 def _cmd_forward(module: str, argv: list[str]) -> int:
@@ -209,6 +212,10 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--out", default="reproduce", help="output folder (default ./reproduce)")
     reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
+    reproduce.add_argument("--seeds", type=int, default=1, metavar="N",
+                           help="run every experiment at N seeds; verdicts say in how many they hold (1)")
+    reproduce.add_argument("--backend", default="mujoco", choices=("mujoco", "analytic"),
+                           help="where rewards are computed: mujoco (default) or analytic (closed forms, quick)")
     reproduce.set_defaults(func=_cmd_reproduce)
 
     bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer (pass --help after the name)")

@@ -293,9 +293,9 @@ def train_group(
 ) -> list[RunResult]:
     """Train several learners in lockstep, with one physics call per step for all.
 
-    The configs share backend, seed, steps and block. Configs of one task and task parameters
+    The configs share backend, steps and block. Configs of one task, task parameters and seed
     share one batched task (they may differ in learner, preset, overrides and trials); configs of
-    different tasks get one task each, stepped together by ``tasks.base.step_together`` (one
+    different tasks or seeds get one task each, stepped together by ``tasks.base.step_together`` (one
     batch of flights for several throw tasks). Each config's trials see the same observations and
     random numbers as when trained alone, so results equal ``train``'s. Comparisons (Figs. 13,
     21-24) and Fig. 25's four experiments run this way: the physics dominates their cost.
@@ -305,18 +305,18 @@ def train_group(
       a group on one task).
 
     Raises:
-      ValueError: the configs differ in backend, seed, steps or block, or ``on_step`` is given for
+      ValueError: the configs differ in backend, steps or block, or ``on_step`` is given for
         a group of several tasks.
     """
     from somarm.tasks.base import step_together
 
     configs = [c.resolved() for c in configs]
-    if len({(c.backend, c.seed, c.n_steps, c.block) for c in configs}) != 1:
-        raise ValueError("a group shares backend, seed, steps and block; these differ")
-    keys = [(c.task, json.dumps(c.task_params, sort_keys=True)) for c in configs]
+    if len({(c.backend, c.n_steps, c.block) for c in configs}) != 1:
+        raise ValueError("a group shares backend, steps and block; these differ")
+    keys = [(c.task, json.dumps(c.task_params, sort_keys=True), c.seed) for c in configs]
     distinct = list(dict.fromkeys(keys))
     if len(distinct) > 1 and on_step is not None:
-        raise ValueError("on_step needs a group on one task")
+        raise ValueError("on_step needs a group on one task and seed")
     first = configs[0]
     tasks = []
     for key in distinct:
