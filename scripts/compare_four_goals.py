@@ -14,7 +14,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "disable")
 
-from somarm import training  # noqa: E402
+from somarm import run  # noqa: E402
 
 
 def main() -> None:
@@ -25,7 +25,7 @@ def main() -> None:
     parser.add_argument("--out", default="runs/four_goals")
     args = parser.parse_args()
     for learner in ("somq", "motoric"):
-        config = training.RunConfig(
+        config = run.RunConfig(
             task="four_goals",
             learner=learner,
             preset="table2",  # Table 2: 10x10 input map, 8x1 action map, floors on alpha, lambda_A, epsilon
@@ -34,8 +34,8 @@ def main() -> None:
             n_steps=2 * args.switch,
             seed=args.seed,
         )
-        result = training.train(config, label=learner)
-        training.write_run(result, Path(args.out) / learner)
+        result = run.train(config, label=learner)
+        run.write(result, Path(args.out) / learner)
         before = -result.block_means[result.steps <= args.switch].mean()
         after = -result.block_means[result.steps > args.switch].mean()
         print(f"{learner:8s} mean error before the move {before:.4f}, after {after:.4f}")

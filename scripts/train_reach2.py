@@ -2,7 +2,7 @@
 
     python scripts/train_reach2.py --trials 20 --steps 50000 --seed 0 --out runs/reach2
 
-The logic lives in ``somarm.training``; this script only chooses a configuration.
+The logic lives in ``somarm.run``; this script only chooses a configuration.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import sys
 
 os.environ.setdefault("MUJOCO_GL", "disable")
 
-from somarm import evaluation, training  # noqa: E402
+from somarm import run  # noqa: E402
 
 
 def main() -> None:
@@ -23,7 +23,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="runs/reach2__somq")
     args = parser.parse_args()
-    config = training.RunConfig(
+    config = run.RunConfig(
         task="reach2",
         learner="somq",
         preset="table1",  # Table 1: 50x1 input map, 50x1 action map, f(t) = 1/(t/1000 + 1)
@@ -32,10 +32,10 @@ def main() -> None:
         n_steps=args.steps,
         seed=args.seed,
     )
-    result = training.train(config)
-    greedy = evaluation.evaluate_greedy(result.learner, result.task, seed=args.seed)
-    training.write_run(result, args.out, extra_summary={"greedy_mean_reward": float(greedy.mean())})
-    print(f"greedy mean distance to fresh goals: {-greedy.mean():.4f} (results in {args.out})")
+    result = run.train(config)
+    greedy = run.greedy_summary(result)
+    run.write(result, args.out, extra_summary=greedy)
+    print(f"greedy mean distance to fresh goals: {-greedy['greedy_mean_reward']:.4f} (results in {args.out})")
 
 
 if __name__ == "__main__":

@@ -19,8 +19,6 @@ __all__ = [
     "flight_time",
     "landing_x",
     "landing_gradient",
-    "landing_slope",
-    "landing_grid",
     "landing_range",
     "solution_ux",
 ]
@@ -75,33 +73,6 @@ def landing_gradient(
     d_ux = _decay_length(k, T)
     d_uy = (2.0 / G) * ((np.asarray(ux, dtype=np.float64) + W) * np.exp(-k * T) - W)
     return d_ux, d_uy
-
-
-def landing_slope(ux: np.ndarray | float, uy: np.ndarray | float, **params) -> np.ndarray:
-    """Steepest slope of the landing position over the velocity square (Fig. 20): ``|grad s_x|``.
-
-    Takes the keyword parameters of ``landing_x``.
-    """
-    d_ux, d_uy = landing_gradient(ux, uy, **params)
-    return np.hypot(d_ux, d_uy)
-
-
-def landing_grid(n: int = 101, **params) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Landing position and its slope over an ``n x n`` grid of the velocity square (Figs. 19, 20).
-
-    Args:
-      n: grid points per axis (>= 2), spanning [0, 1] inclusive.
-      **params: G, Fr, W, M as in ``landing_x`` (scalars).
-
-    Returns:
-      ``(ux (n,), uy (n,), landing (n, n), slope (n, n))``, indexed ``[i_uy, i_ux]``.
-    """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise ValueError(f"n must be a whole number >= 2, got {n!r}")
-    ux = np.linspace(0.0, 1.0, n)
-    uy = np.linspace(0.0, 1.0, n)
-    UX, UY = np.meshgrid(ux, uy)
-    return ux, uy, landing_x(UX, UY, **params), landing_slope(UX, UY, **params)
 
 
 def _extreme_over_uy(ux: float, *, G, Fr, W, M, largest: bool) -> np.ndarray:

@@ -5,9 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
-import signal
 import sys
-import threading
 from pathlib import Path
 
 __all__ = ["main"]
@@ -18,7 +16,7 @@ _BENCHMARKS = ("learner", "tasks", "viewer")
 class _Parser(argparse.ArgumentParser):
     """argparse that reports a usage error in one line (``somarm: error: ...``)."""
 
-    def error(self, message: str):  # noqa: D401 - argparse's signature
+    def error(self, message: str):  # argparse's signature
         raise ValueError(message)
 
 
@@ -34,25 +32,8 @@ def _check_writable(folder: Path) -> Path:
     return folder
 
 
-def _stop_on_sigterm() -> None:
-    """Treat SIGTERM like Ctrl-C, so a stopped run still writes its valid partial results."""
-
-    def handler(signum, frame):
-        raise KeyboardInterrupt
-
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, handler)
-
-
 def _first_line(exc: BaseException) -> str:
     return (str(exc).strip().splitlines() or [type(exc).__name__])[-1]
-
-
-def _n_trials(trials: int | None, trial_ids: list[int] | None) -> int:
-    """--trials, or the number of --trial-ids; both given must agree."""
-    if trial_ids and trials is not None and trials != len(trial_ids):
-        raise ValueError(f"--trials {trials} disagrees with {len(trial_ids)} --trial-ids; give one of them")
-    return len(trial_ids) if trial_ids else (1 if trials is None else trials)
 
 
 def _cmd_tasks(args) -> int:
@@ -72,24 +53,13 @@ def _cmd_presets(args) -> int:
 
 
 def _cmd_train(args) -> int:
-    from somarm import evaluation, training
+    from somarm import run
+    from somarm.stopping import sigterm_as_interrupt
 
-    config = training.RunConfig(
-        task=args.task,
-        learner=args.learner,
-        preset=args.preset,
-        overrides=training.parse_assignments(args.set, "--set"),
-        task_params=training.parse_assignments(args.task_set, "--task-set"),
-        n_trials=_n_trials(args.trials, args.trial_ids),
-        trial_ids=args.trial_ids,
-        n_steps=args.steps,
-        seed=args.seed,
-        backend=args.backend,
-        block=args.block,
-    ).resolved()
-    training.build(config)  # fail fast on a bad preset, --set or --task-set before any output
+    config = run.from_options(args)
+    group = run.RunGroup([config])  # built once: a bad preset, --set or --task-set fails before any output
     out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
-    _stop_on_sigterm()
+    sigterm_as_interrupt()
     hook = None
     view = None
     if args.view:
@@ -104,23 +74,14 @@ def _cmd_train(args) -> int:
         print(f"viewer: {view.url}", flush=True)
         hook = view.update
     try:
-        result = training.train(config, progress=not args.no_progress, on_step=hook)
+        result = group.train(progress=not args.no_progress, on_step=hook)[0]
     finally:
         if view is not None:
             view.close()
-    extra = {}
-    if result.steps_done > 0:
-        try:  # the run is written whatever happens here
-            greedy = evaluation.evaluate_greedy(result.learner, result.task, seed=config.seed)
-            extra = {
-                "greedy_mean_reward": float(greedy.mean()),
-                "greedy_sd_reward": float(greedy.std()),
-                "greedy_observations": 1000,
-            }
-        except ValueError as exc:
-            extra = {"greedy_error": str(exc)}
-            print(f"somarm: warning: greedy evaluation failed: {exc}", file=sys.stderr)
-    training.write_run(result, out, figures=not args.no_figures, extra_summary=extra)
+    extra = run.greedy_summary(result)  # the run is written whatever happens here
+    if "greedy_error" in extra:
+        print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
+    run.write(result, out, figures=not args.no_figures, extra_summary=extra)
     if result.interrupted:
         print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
         return 130
@@ -133,18 +94,10 @@ def _cmd_train(args) -> int:
 
 
 def _cmd_evaluate(args) -> int:
-    from somarm import evaluation, tasks, training
+    from somarm import evaluation, run
 
-    config, learner = training.load_run(args.run)
-    task = tasks.make(
-        config.task,
-        n_trials=learner.n_trials,
-        seed=config.seed,
-        backend=config.backend,
-        **training.task_kwargs(config.task_params),
-    )
-    if hasattr(task, "set_step"):
-        task.set_step(learner.t)  # tasks whose goals move (four_goals) evaluate in the learned phase
+    config, learner = run.load(args.run)
+    task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
     rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=args.seed)
     print(
         f"{config.task}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "
@@ -155,12 +108,13 @@ def _cmd_evaluate(args) -> int:
 
 def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
+    from somarm.stopping import sigterm_as_interrupt
     from somarm.validation import check_int
 
     runner.check_names(args.only)
     check_int("seeds", args.seeds)
     out = _check_writable(Path(args.out))
-    _stop_on_sigterm()
+    sigterm_as_interrupt()
     return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress,
                             seeds=args.seeds, backend=args.backend)
 
@@ -170,30 +124,16 @@ def _cmd_forward(module: str, argv: list[str]) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
+    from somarm import run
+
     parser = _Parser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     sub.add_parser("tasks", help="list the registered tasks").set_defaults(func=_cmd_tasks)
     sub.add_parser("presets", help="list the paper's parameter tables").set_defaults(func=_cmd_presets)
 
     train = sub.add_parser("train", help="train headless and write a run folder")
-    train.add_argument("task", help="task name (see `somarm tasks`)")
-    train.add_argument("--learner", default="somq", help="somq (default) or motoric")
-    train.add_argument("--preset", help="parameter table (see `somarm presets`); default: the task's")
-    train.add_argument("--set", action="append", metavar="KEY=VALUE", help="change a learner setting")
-    train.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
-    train.add_argument("--trials", type=int, help="independent trials (default 1)")
-    train.add_argument(
-        "--trial-ids",
-        type=int,
-        nargs="+",
-        metavar="I",
-        help="run these trials only, e.g. 7 to replay trial 7 of a batch alone",
-    )
-    train.add_argument("--steps", type=int, help="training steps (default: the task's)")
-    train.add_argument("--seed", type=int, default=0, help="the run's seed (default 0)")
+    run.add_options(train)  # every run setting, its default and help, from RunConfig
     train.add_argument("--out", help="run folder (default runs/TASK__LEARNER__seedS)")
-    train.add_argument("--backend", default="mujoco", help="mujoco (default) or analytic")
-    train.add_argument("--block", type=int, default=100, help="steps per learning-curve point")
     train.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.add_argument("--view", action="store_true", help="stream to a meshcat browser viewer")

@@ -1,383 +1,74 @@
-"""The learner registry, and what SOM-Q and the Motoric Map share: checks, config text, files.
+"""The learner registry: every learner kind, by name, and the one place that lists them.
 
-``LEARNERS`` maps a kind to its ``(config class, learner class)``; ``make_learner`` builds one
-and ``load_learner`` reopens a saved one whatever its kind. The registry is filled on first use
-(module ``__getattr__``) because the learners import their shared base from here.
-
-A saved learner is one ``.npz`` (written atomically): its arrays, plus a JSON string holding
-the kind, config, bounds, seed, trial ids, step count and random-stream positions. Loading it
-continues exactly as if the learner had never stopped, even between ``act`` and ``learn``.
+``make`` builds a learner of a kind and ``load`` reopens a saved one whatever its kind. A new
+kind is its own module (a config subclassing ``learner_base.ConfigBase`` and a learner
+subclassing ``learner_base.LearnerBase``) plus one line in ``LEARNERS``.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import os
-import zipfile
 from typing import Any
 
-import numpy as np
+from .learner_base import initial_generator, read_file
+from .motoric import MotoricConfig, MotoricMap
+from .somq import SOMQ, SOMQConfig
 
-from .io import atomic_save_npz
-from .schedules import Schedule, parse_bool, parse_decay, parse_shape
-from .som import grid_coordinates, grid_distances, map_shape
-from .streams import PURPOSES, UniformStreams, trial_ids_for
-from .validation import check_bounds, check_int, check_number
+__all__ = ["LEARNERS", "KINDS", "config_class", "make", "load", "make_learner", "load_learner",
+           "initial_generator"]
 
-__all__ = [
-    "LEARNERS",  # noqa: F822 (filled on first use by __getattr__)
-    "make_learner",
-    "load_learner",
-    "LearnerBase",
-    "initial_generator",
-    "validate_common",
-    "config_to_dict",
-    "config_from_dict",
-    "override_config",
-]
-
-_KINDS = ("somq", "motoric")
-
-
-def __getattr__(name: str) -> Any:
-    if name == "LEARNERS":
-        from .motoric import MotoricConfig, MotoricMap
-        from .somq import SOMQ, SOMQConfig
-
-        registry = {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap)}
-        globals()["LEARNERS"] = registry  # from now on an ordinary module attribute
-        return registry
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+#: kind -> (config class, learner class)
+LEARNERS: dict[str, tuple[type, type]] = {
+    "somq": (SOMQConfig, SOMQ),
+    "motoric": (MotoricConfig, MotoricMap),
+}
+KINDS = tuple(LEARNERS)
 
 
 def _entry(kind: str) -> tuple[type, type]:
-    if kind not in _KINDS:
-        raise ValueError(f"unknown learner kind {kind!r}; allowed: {', '.join(_KINDS)}")
-    return __getattr__("LEARNERS")[kind]
+    if kind not in LEARNERS:
+        raise ValueError(f"unknown learner kind {kind!r}; allowed: {', '.join(LEARNERS)}")
+    return LEARNERS[kind]
 
 
-def make_learner(kind: str, config: Any = None, **kwargs: Any):
+def config_class(kind: str) -> type:
+    """The config class of learner ``kind``.
+
+    Raises:
+      ValueError: an unknown kind (the message lists the kinds).
+    """
+    return _entry(kind)[0]
+
+
+def make(kind: str, config: Any = None, **kwargs: Any):
     """Build a learner by kind.
 
     Args:
-      kind: ``"somq"`` or ``"motoric"``.
+      kind: one of ``KINDS``.
       config: its config (default: the config class's defaults).
       **kwargs: the learner's keywords (observation_low, ..., n_trials, seed, trial_ids).
 
     Raises:
       ValueError: an unknown kind (the message lists the kinds) or a config of the wrong class.
     """
-    config_class, learner_class = _entry(kind)
-    config = config_class() if config is None else config
-    if not isinstance(config, config_class):
-        raise ValueError(f"a {kind} learner needs a {config_class.__name__}, got {type(config).__name__}")
-    return learner_class(config, **kwargs)
+    config_type, learner_type = _entry(kind)
+    config = config_type() if config is None else config
+    if not isinstance(config, config_type):
+        raise ValueError(f"a {kind} learner needs a {config_type.__name__}, got {type(config).__name__}")
+    return learner_type(config, **kwargs)
 
 
-def load_learner(path: str | os.PathLike):
-    """Reopen a learner saved with ``save(path)``, whatever its kind."""
-    return _entry(_read_file(path)[0]["kind"])[1].load(path)
+def load(path: str | os.PathLike):
+    """Reopen a learner saved with ``save(path)``, whatever its kind.
 
-
-def initial_generator(seed: int, trial_id: int) -> np.random.Generator:
-    """The generator for a trial's initial weights: a child of its learner stream's seed.
-
-    Using the child (spawn key ``(learner, trial_id, 0)``) keeps the initial weights independent
-    of the per-step rows drawn by ``UniformStreams(seed, ..., "learner")``.
+    Raises:
+      ValueError: the file is missing, damaged, or holds no known kind (the kinds are listed).
     """
-    sequence = np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["learner"], int(trial_id), 0))
-    return np.random.Generator(np.random.PCG64(sequence))
+    kind = read_file(path)[0]["kind"]
+    if kind not in LEARNERS:
+        raise ValueError(f"{path} holds no known learner kind; allowed: {', '.join(LEARNERS)}")
+    return LEARNERS[kind][1].load(path)
 
 
-# -- configs ------------------------------------------------------------------------------------
-#: The schedules that are learning rates (a step of ``rate x (target - value)``).
-_RATES = ("alpha", "lambda_s", "lambda_a")
-
-
-def validate_common(config: Any, *, probabilities: tuple[str, ...] = ()) -> None:
-    """Check and normalise a learner config in place (frozen dataclass ``__post_init__``)."""
-    set_field = object.__setattr__
-    for name in ("input_shape", "action_shape"):
-        if hasattr(config, name):
-            set_field(config, name, map_shape(name, getattr(config, name)))
-    for name in config.SCHEDULES:
-        value = getattr(config, name)
-        if not isinstance(value, Schedule):
-            set_field(config, name, Schedule(check_number(name, value, minimum=0.0)))
-        elif name in probabilities and max(value.scale, value.floor) > 1.0:
-            raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
-        elif name in _RATES and max(value.scale, value.floor) > 1.0:
-            # A rate above 1 overshoots its target: a SOM unit lands beyond the vector it moves to.
-            raise ValueError(f"{name} is a learning rate and must lie in [0, 1], got {value!r}")
-    set_field(config, "gamma", check_number("gamma", config.gamma, minimum=0.0, maximum=1.0))
-    for name in ("neighbourhood_q", "neighbourhood_values", "epsilon_relative"):
-        if hasattr(config, name) and not isinstance(getattr(config, name), bool):
-            raise ValueError(f"{name} must be True or False, got {getattr(config, name)!r}")
-    if config.noise not in ("uniform", "gaussian"):
-        raise ValueError(f"noise must be 'uniform' or 'gaussian', got {config.noise!r}")
-    if config.input_init is not None:
-        low, high = check_bounds("input_init", *np.asarray(config.input_init, dtype=float).reshape(2))
-        set_field(config, "input_init", (float(low[0]), float(high[0])))
-
-
-def config_to_dict(config: Any) -> dict[str, Any]:
-    """A learner config as JSON-able values (schedules as their ``to_dict``)."""
-    out = {}
-    for field in dataclasses.fields(config):
-        value = getattr(config, field.name)
-        out[field.name] = value.to_dict() if isinstance(value, Schedule) else (
-            list(value) if isinstance(value, tuple) else value
-        )
-    return out
-
-
-def config_from_dict(cls: type, d: dict[str, Any]) -> Any:
-    """Inverse of ``config_to_dict``; ValueError naming an unknown or bad field."""
-    names = [field.name for field in dataclasses.fields(cls)]
-    unknown = sorted(set(d) - set(names))
-    if unknown:
-        raise ValueError(f"unknown {cls.__name__} fields {unknown}; allowed: {', '.join(names)}")
-    values = {}
-    for name, value in d.items():
-        try:
-            if name in cls.SCHEDULES and isinstance(value, dict):
-                value = Schedule.from_dict(value)
-            elif isinstance(value, list):
-                value = tuple(value)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ValueError(f"{cls.__name__} field {name}: {exc}") from None
-        values[name] = value
-    return cls(**values)
-
-
-def override_config(config: Any, overrides: dict[str, str]) -> Any:
-    """Apply command-line ``key=value`` strings to a learner config (see ``SOMQConfig.with_overrides``)."""
-    fields = {field.name: getattr(config, field.name) for field in dataclasses.fields(config)}
-    schedules = config.SCHEDULES
-    others = [name for name in fields if name not in schedules]
-    allowed = (
-        "decay, "
-        + ", ".join(f"{name}[.scale|.floor|.decay]" for name in schedules)
-        + ", "
-        + ", ".join(others)
-    )
-    for key, text in overrides.items():
-        name, _, part = str(key).partition(".")
-        try:
-            if key == "decay":
-                decay = parse_decay(text)
-                for sched in schedules:
-                    fields[sched] = fields[sched].with_changes(decay=decay)
-            elif name in schedules and part in ("", "scale"):
-                fields[name] = fields[name].with_changes(scale=check_number(name, float(text), minimum=0.0))
-            elif name in schedules and part == "floor":
-                fields[name] = fields[name].with_changes(floor=check_number(key, float(text), minimum=0.0))
-            elif name in schedules and part == "decay":
-                fields[name] = fields[name].with_changes(decay=parse_decay(text))
-            elif part or name not in others:
-                raise ValueError(f"unknown key {key!r}; allowed keys: {allowed}")
-            elif name.endswith("_shape"):
-                fields[name] = parse_shape(name, text)
-            elif isinstance(fields[name], bool):
-                fields[name] = parse_bool(name, text)
-            elif name == "input_init":
-                low_high = str(text).replace(",", ":").split(":")
-                fields[name] = None if str(text).lower() == "none" else tuple(float(v) for v in low_high)
-            elif name == "gamma":
-                fields[name] = float(text)
-            else:
-                fields[name] = str(text)
-            type(config)(**fields)  # validate now, so the error names this key
-        except ValueError as exc:
-            message = str(exc)
-            if not message.startswith("unknown key"):
-                message = f"{key}={text}: {message}"
-            raise ValueError(message) from None
-    return type(config)(**fields)
-
-
-# -- files ----------------------------------------------------------------------------------
-def _read_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in data.files}
-        meta = json.loads(str(arrays.pop("meta")))
-    except (OSError, KeyError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        reason = "not a learner file (or a damaged one)" if "pickle" in str(exc) else str(exc)
-        raise ValueError(f"cannot read a learner from {path}: {reason}") from None
-    if meta.get("kind") not in _KINDS:
-        raise ValueError(f"{path} holds no learner kind; allowed: {', '.join(_KINDS)}")
-    return meta, arrays
-
-
-class LearnerBase:
-    """What SOM-Q and the Motoric Map share: the input map, checks, parameters, save and load.
-
-    A subclass sets ``kind``, ``config_class``, ``_STATE_ARRAYS`` (arrays saved and restored) and
-    implements ``_build`` (its own maps and random streams), ``act``, ``learn``, ``greedy_units``
-    and ``predict``.
-    """
-
-    kind = ""
-    config_class: type = object
-    _STATE_ARRAYS: tuple[str, ...] = ()
-    _PENDING_ARRAYS = ("_observations", "_winners", "_units", "_actions")
-
-    def __init__(self, config, *, observation_low, observation_high, action_low, action_high,
-                 n_trials: int = 1, seed: int = 0, trial_ids=None):
-        if not isinstance(config, self.config_class):
-            raise ValueError(f"config must be a {self.config_class.__name__}, got {type(config).__name__}")
-        self.config = config
-        self.observation_low, self.observation_high = check_bounds("observation", observation_low,
-                                                                   observation_high)
-        self.action_low, self.action_high = check_bounds("action", action_low, action_high)
-        self.n_trials = check_int("n_trials", n_trials, minimum=1)
-        self.seed = check_int("seed", seed, minimum=0)
-        self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
-        self.obs_dim, self.action_dim = self.observation_low.size, self.action_low.size
-        self.t = 0
-        self.input_grid, self._distances_s = self._grid(config.input_shape)
-        self.input_weights = np.empty((self.n_trials, self.input_grid.shape[0], self.obs_dim))
-        # What act() leaves for learn(): observations, winners, chosen units, perturbed actions.
-        self._observations = np.zeros((self.n_trials, self.obs_dim))
-        self._winners = np.zeros(self.n_trials, dtype=np.int64)
-        self._units = np.zeros(self.n_trials, dtype=np.int64)
-        self._actions = np.zeros((self.n_trials, self.action_dim))
-        self._pending = False
-        self._no_bootstrap = np.zeros(self.n_trials, dtype=np.bool_)
-        self._current_t = -1
-        self._epsilon_buffer = np.empty(self.action_dim)
-        self._build()
-
-    def _build(self) -> None:
-        raise NotImplementedError
-
-    @staticmethod
-    def _grid(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-        coordinates = grid_coordinates(shape)
-        return coordinates, grid_distances(coordinates)
-
-    def _initial_generators(self) -> list[np.random.Generator]:
-        return [initial_generator(self.seed, trial_id) for trial_id in self.trial_ids]
-
-    def _initial_input_weights(self, rng: np.random.Generator) -> np.ndarray:
-        low, high = self.observation_low, self.observation_high
-        if self.config.input_init is not None:
-            low = np.full_like(low, self.config.input_init[0])
-            high = np.full_like(high, self.config.input_init[1])
-        return low + (high - low) * rng.random((self.input_grid.shape[0], self.obs_dim))
-
-    def _open_streams(self, width: int) -> None:
-        self._streams = UniformStreams(self.seed, self.trial_ids, "learner", width)
-
-    # -- checks ---------------------------------------------------------------------------------
-    # These run on every step, so they are lean: no copy of an array that is already float64, and
-    # (with ``finite=False``) the NaN/inf scan is left to the compiled kernel, which does it
-    # before it changes anything.
-    @staticmethod
-    def _floats(name: str, value) -> np.ndarray:
-        if type(value) is np.ndarray and value.dtype == np.float64:
-            return value
-        try:
-            return np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}") from None
-
-    def _check_observations(self, observations, *, allow_many=False, name="observations",
-                            finite=True) -> np.ndarray:
-        x = self._floats(name, observations)
-        n, d = self.n_trials, self.obs_dim
-        if not (x.shape == (n, d) or (allow_many and x.ndim == 3 and x.shape[0] == n and x.shape[2] == d)):
-            shape = "(n_trials, obs_dim)" + (" or (n_trials, n_obs, obs_dim)" if allow_many else "")
-            raise ValueError(f"{name} must have shape {shape} with n_trials={n}, obs_dim={d}, got {x.shape}")
-        if finite and not np.isfinite(x).all():
-            raise ValueError(f"{name} must be finite, got NaN or inf")
-        return x
-
-    def _check_learn(self, rewards, next_observations, terminal, *, finite=True):
-        """``(rewards, bootstrap, next_observations)`` checked; see ``_check_observations`` for ``finite``."""
-        if not self._pending:
-            raise ValueError("learn() needs a preceding act(): call act(observations) first")
-        r = self._floats("rewards", rewards)
-        if r.shape != (self.n_trials,):
-            raise ValueError(f"rewards must have shape (n_trials,) = ({self.n_trials},), got {r.shape}")
-        if finite and not np.isfinite(r).all():
-            raise ValueError("rewards must be finite, got NaN or inf")
-        if terminal is True:
-            bootstrap = self._no_bootstrap
-        else:
-            done = np.asarray(terminal)
-            if done.dtype != np.bool_ or done.shape not in ((), (self.n_trials,)):
-                raise ValueError(f"terminal must be a bool or {self.n_trials} bools, got {terminal!r}")
-            bootstrap = self._no_bootstrap
-            if self.config.gamma > 0.0:
-                bootstrap = ~np.broadcast_to(done, (self.n_trials,))
-        if next_observations is None:
-            if bootstrap is not self._no_bootstrap and bootstrap.any():
-                raise ValueError("next_observations (n_trials, obs_dim) are needed when gamma > 0 and "
-                                 "a trial is not terminal")
-            return r, bootstrap, self._observations
-        x_next = self._check_observations(next_observations, name="next_observations", finite=finite)
-        return r, bootstrap, x_next
-
-    def _epsilons(self, epsilon: float) -> np.ndarray:
-        """The perturbation scale of each action dimension, ``(action_dim,)``."""
-        if self.config.epsilon_relative:
-            return epsilon * (self.action_high - self.action_low)
-        self._epsilon_buffer.fill(epsilon)
-        return self._epsilon_buffer
-
-    def _current(self) -> dict[str, float]:
-        # Seven schedule values, computed once per step (act and learn share them).
-        if self._current_t != self.t:
-            self._current_values = {name: getattr(self.config, name).value(self.t)
-                                    for name in self.config.SCHEDULES}
-            self._current_t = self.t
-        return self._current_values
-
-    def parameters(self) -> dict[str, float]:
-        """The current value of every schedule (at step ``t``)."""
-        return dict(self._current())
-
-    # -- save / load ----------------------------------------------------------------------------
-    def save(self, path: str | os.PathLike) -> None:
-        """Write the whole state (config, maps, values, step, random streams) atomically to ``path``."""
-        streams = self._streams.get_state()
-        meta = {
-            "kind": self.kind,
-            "config": self.config.to_dict(),
-            "bounds": [b.tolist() for b in (self.observation_low, self.observation_high,
-                                            self.action_low, self.action_high)],
-            "n_trials": self.n_trials,
-            "seed": self.seed,
-            "trial_ids": self.trial_ids.tolist(),
-            "t": self.t,
-            "pending": self._pending,
-            "streams": {key: value for key, value in streams.items() if key != "buffer"},
-        }
-        arrays = {name: getattr(self, name) for name in self._STATE_ARRAYS + self._PENDING_ARRAYS}
-        atomic_save_npz(path, meta=np.array(json.dumps(meta)), stream_buffer=streams["buffer"], **arrays)
-
-    @classmethod
-    def load(cls, path: str | os.PathLike):
-        """Reopen a learner written by ``save``; it continues exactly where it stopped.
-
-        Raises:
-          ValueError: the file is missing, unreadable or holds another kind of learner.
-        """
-        meta, arrays = _read_file(path)
-        if meta["kind"] != cls.kind:
-            raise ValueError(f"{path} holds a {meta['kind']} learner, not {cls.kind}")
-        low_s, high_s, low_a, high_a = meta["bounds"]
-        learner = cls(cls.config_class.from_dict(meta["config"]), observation_low=low_s,
-                      observation_high=high_s, action_low=low_a, action_high=high_a,
-                      n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
-        for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS:
-            target = getattr(learner, name)
-            if arrays[name].shape != target.shape:
-                raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")
-            target[...] = arrays[name]
-        learner.t, learner._pending = int(meta["t"]), bool(meta["pending"])
-        learner._streams.set_state({**meta["streams"], "buffer": arrays["stream_buffer"]})
-        return learner
+make_learner = make  # the names before issue 8
+load_learner = load

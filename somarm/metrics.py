@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "grid_distances",
+    "chebyshev_distances",
     "topographic_error",
     "nearest_is_neighbour",
     "greedy_jumps",
@@ -20,7 +20,7 @@ __all__ = [
 ]
 
 
-def grid_distances(grid: np.ndarray) -> np.ndarray:
+def chebyshev_distances(grid: np.ndarray) -> np.ndarray:
     """Chebyshev distances between units on a map grid: ``(n_units, 2) -> (n_units, n_units)``.
 
     Two units are neighbours when this distance is 1 (the 8-neighbourhood on a 2-D grid).
@@ -37,7 +37,7 @@ def topographic_error(weights: np.ndarray, grid: np.ndarray, samples: np.ndarray
     """
     d = ((samples[:, None, :] - weights[None, :, :]) ** 2).sum(axis=-1)
     order = np.argsort(d, axis=1)[:, :2]
-    return float((grid_distances(grid)[order[:, 0], order[:, 1]] > 1).mean())
+    return float((chebyshev_distances(grid)[order[:, 0], order[:, 1]] > 1).mean())
 
 
 def nearest_is_neighbour(weights: np.ndarray, grid: np.ndarray) -> float:
@@ -45,7 +45,7 @@ def nearest_is_neighbour(weights: np.ndarray, grid: np.ndarray) -> float:
     d = ((weights[:, None, :] - weights[None, :, :]) ** 2).sum(axis=-1)
     np.fill_diagonal(d, np.inf)
     nearest = d.argmin(axis=1)
-    return float((grid_distances(grid)[np.arange(len(weights)), nearest] <= 1).mean())
+    return float((chebyshev_distances(grid)[np.arange(len(weights)), nearest] <= 1).mean())
 
 
 def greedy_jumps(greedy: np.ndarray, input_grid: np.ndarray, action_grid: np.ndarray) -> np.ndarray:
@@ -57,8 +57,8 @@ def greedy_jumps(greedy: np.ndarray, input_grid: np.ndarray, action_grid: np.nda
     Returns:
       ``(n_pairs,)`` action-grid distances (0 or 1 where the Q-table keeps topology).
     """
-    neighbours = np.argwhere(np.triu(grid_distances(input_grid) == 1))
-    action_d = grid_distances(action_grid)
+    neighbours = np.argwhere(np.triu(chebyshev_distances(input_grid) == 1))
+    action_d = chebyshev_distances(action_grid)
     return action_d[greedy[neighbours[:, 0]], greedy[neighbours[:, 1]]]
 
 

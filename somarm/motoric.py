@@ -23,12 +23,13 @@ dimension for Gaussian noise); initial weights as SOM-Q (input weights, then one
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 
-from .learners import LearnerBase, config_from_dict, config_to_dict, override_config, validate_common
+from .learner_base import ConfigBase, LearnerBase, validate_common
 from .schedules import InverseDecay, Schedule
 from .som import neighbourhood, update, winners
 
@@ -38,7 +39,7 @@ _F = InverseDecay(500.0)
 
 
 @dataclass(frozen=True)
-class MotoricConfig:
+class MotoricConfig(ConfigBase):
     """Everything that defines a Motoric Map; the defaults are Table 2's numbers.
 
     ``somarm.presets.get_motoric("table2")`` is Fig. 13 B's config: these defaults with the input
@@ -75,19 +76,13 @@ class MotoricConfig:
     def __post_init__(self) -> None:
         validate_common(self)
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able form; ``from_dict`` gives back an equal config."""
-        return config_to_dict(self)
-
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> MotoricConfig:
-        """Inverse of ``to_dict``. Raises ValueError naming a bad or unknown field."""
-        return config_from_dict(cls, d)
-
-    def with_overrides(self, overrides: dict[str, str]) -> MotoricConfig:
-        """A copy with command-line ``key=value`` strings applied (keys as ``SOMQConfig.with_overrides``,
-        with ``neighbourhood_values`` for ``neighbourhood_q`` and no ``p`` or ``action_shape``)."""
-        return override_config(self, overrides)
+    def from_table(cls, table: Any) -> MotoricConfig:
+        """The counterpart of a SOM-Q table: every shared number kept, N_A on the input grid,
+        ``neighbourhood_values`` as the table's ``neighbourhood_q``."""
+        shared = {field.name for field in dataclasses.fields(cls)} & set(table.to_dict())
+        values = {name: getattr(table, name) for name in shared}
+        return cls(**values, neighbourhood_values=table.neighbourhood_q)
 
 
 class MotoricMap(LearnerBase):

@@ -161,21 +161,6 @@ def draw_action_map(
         ax.set_ylabel("action unit index")
 
 
-#: Axis names of each task's observations and (normalised) actions, for the run figures.
-_ARM_ACTIONS = ("theta1 (normalised from [-pi, pi])", "theta2 (normalised)")
-_THROW_ACTIONS = ("u_x (horizontal speed)", "u_y (vertical speed)")
-AXIS_LABELS: dict[str, tuple[tuple[str, ...], tuple[str, str]]] = {
-    "reach2": (("goal x", "goal y"), _ARM_ACTIONS),
-    "reach20": (("goal x", "goal y"), _ARM_ACTIONS),
-    "four_goals": (("input x", "input y"), _ARM_ACTIONS),
-    "throw": (("target X",), _THROW_ACTIONS),
-    "throw_distance": (("target X",), _THROW_ACTIONS),
-    "throw_wind": (("target X", "wind W"), _THROW_ACTIONS),
-    "throw_friction": (("target X", "wind W"), _THROW_ACTIONS),
-    "throw_mass": (("target X", "wind W"), _THROW_ACTIONS),
-}
-
-
 def run_figures(result, out: Path) -> list[Path]:
     """The three figures of ``somarm train``: learning curve, input map, action map (trial 0)."""
     config, learner, task = result.config, result.learner, result.task
@@ -204,9 +189,10 @@ def run_figures(result, out: Path) -> list[Path]:
         greedy = np.arange(len(input_weights))
         n_actions = len(input_weights)
     fig, ax = plt.subplots(figsize=(5, 5))
-    observation_labels, action_labels = AXIS_LABELS.get(
-        config.task, (("observation 1", "observation 2"), ("action 1 (normalised)", "action 2 (normalised)"))
-    )
+    from somarm import tasks  # the task's record names its axes
+
+    record = tasks.record(config.task)
+    observation_labels, action_labels = record.observation_labels, record.action_labels
     draw_input_map(ax, input_weights, greedy, n_actions, grid_shape, labels=(*observation_labels, "")[:2])
     ax.set_title("input map (trial 0), shaded by greedy action unit")
     paths.append(save(fig, out / "input_map.png"))

@@ -21,7 +21,6 @@ neighbourhood, on the input grid, uses Table 2's N_A = 3 f(t). That mapping is t
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 from .motoric import MotoricConfig
@@ -232,10 +231,8 @@ def describe(name: str) -> str:
 
 
 def motoric_from_somq(config: SOMQConfig) -> MotoricConfig:
-    """The Motoric Map counterpart of a SOM-Q config: every shared number kept, N_A on the input grid."""
-    shared = {field.name for field in dataclasses.fields(MotoricConfig)} & set(config.to_dict())
-    values = {name: getattr(config, name) for name in shared}
-    return MotoricConfig(**values, neighbourhood_values=config.neighbourhood_q)
+    """The Motoric Map counterpart of a SOM-Q config (``MotoricConfig.from_table``)."""
+    return MotoricConfig.from_table(config)
 
 
 def get_motoric(name: str) -> MotoricConfig:
@@ -247,14 +244,12 @@ def get_motoric(name: str) -> MotoricConfig:
     return motoric_from_somq(get(name))
 
 
-def config_for(kind: str, name: str) -> SOMQConfig | MotoricConfig:
-    """The config of learner ``kind`` (``somq`` or ``motoric``) for preset ``name``.
+def config_for(kind: str, name: str):
+    """The config of learner ``kind`` (see ``somarm.learners.KINDS``) for preset ``name``.
 
     Raises:
       ValueError: an unknown kind or name (the message lists what is allowed).
     """
-    if kind == "somq":
-        return get(name)
-    if kind == "motoric":
-        return get_motoric(name)
-    raise ValueError(f"unknown learner kind {kind!r}; allowed: somq, motoric")
+    from .learners import config_class
+
+    return config_class(kind).from_table(get(name))

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .learners import initial_generator
+from .learner_base import initial_generator
 from .som import grid_coordinates, grid_distances, neighbourhood
 from .somq import SOMQConfig, row_width
 from .streams import UniformStreams, trial_ids_for

@@ -27,7 +27,6 @@ __all__ = [
     "squared_distances",
     "winners",
     "update",
-    "uniform_weights",
 ]
 
 
@@ -131,8 +130,3 @@ def update(
     if mask is not None:
         rates = np.where(mask[:, None], rates, 0.0)
     weights += rates[:, :, None] * (x[:, None, :] - weights)
-
-
-def uniform_weights(rng: np.random.Generator, n_units: int, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-    """Initial weights drawn evenly in the box ``[low, high)``, shape ``(n_units, dim)`` (Table 1)."""
-    return low + (high - low) * rng.random((n_units, low.shape[0]))

@@ -24,12 +24,12 @@ action boxes, observations, actions and rewards. Rules where the paper is brief:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
 from . import _kernels
-from .learners import LearnerBase, config_from_dict, config_to_dict, override_config, validate_common
+from .learner_base import ConfigBase, LearnerBase, validate_common
 from .schedules import InverseDecay, Schedule
 from .som import winners
 
@@ -39,7 +39,7 @@ _F1 = InverseDecay(1000.0)
 
 
 @dataclass(frozen=True)
-class SOMQConfig:
+class SOMQConfig(ConfigBase):
     """Everything that defines a SOM-Q learner; the defaults are Table 1's numbers (reach2, Fig. 7).
 
     ``somarm.presets.get("table1")`` is the full Table 1 (it also starts the input weights in
@@ -79,28 +79,6 @@ class SOMQConfig:
 
     def __post_init__(self) -> None:
         validate_common(self, probabilities=("p",))
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able form; ``from_dict`` gives back an equal config."""
-        return config_to_dict(self)
-
-    @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> SOMQConfig:
-        """Inverse of ``to_dict``. Raises ValueError naming a bad or unknown field."""
-        return config_from_dict(cls, d)
-
-    def with_overrides(self, overrides: dict[str, str]) -> SOMQConfig:
-        """A copy with command-line ``key=value`` strings applied, e.g. ``{"decay": "exp:0.9985"}``.
-
-        Keys: ``decay`` (``inv:TAU``, ``exp:C`` or ``const``, for every schedule), ``<param>`` or
-        ``<param>.scale`` (a number), ``<param>.floor``, ``<param>.decay`` for each schedule,
-        ``input_shape``/``action_shape`` (``50`` or ``10x10``), ``gamma``, ``neighbourhood_q``
-        (true|false), ``noise`` (uniform|gaussian), ``input_init`` (``LOW:HIGH`` or ``none``).
-
-        Raises:
-          ValueError: one line naming the bad key or value and listing the allowed keys.
-        """
-        return override_config(self, overrides)
 
 
 def row_width(config: SOMQConfig, action_dim: int) -> int:

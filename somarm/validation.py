@@ -9,7 +9,6 @@ import numpy as np
 __all__ = [
     "check_int",
     "check_number",
-    "check_probability",
     "check_array",
     "check_bounds",
 ]
@@ -37,14 +36,6 @@ def check_number(
         raise ValueError(f"{name} must be {sign} {minimum}, got {value!r}")
     if maximum is not None and value > maximum:
         raise ValueError(f"{name} must be <= {maximum}, got {value!r}")
-    return value
-
-
-def check_probability(name: str, value: object) -> float:
-    """``value`` as a float in [0, 1]; ValueError naming ``name`` otherwise."""
-    value = check_number(name, value)
-    if not 0.0 <= value <= 1.0:
-        raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
     return value
 
 

@@ -73,18 +73,6 @@ def test_gradient_equals_finite_differences():
     fd_uy = (ballistics.landing_x(ux, uy + h, **params) - ballistics.landing_x(ux, uy - h, **params)) / (2 * h)
     np.testing.assert_allclose(d_ux, fd_ux, rtol=1e-6)
     np.testing.assert_allclose(d_uy, fd_uy, rtol=1e-6)
-    np.testing.assert_allclose(ballistics.landing_slope(ux, uy, **params), np.hypot(fd_ux, fd_uy), rtol=1e-6)
-
-
-def test_grid_for_figures_19_and_20():
-    ux, uy, landing, slope = ballistics.landing_grid(21)
-    assert landing.shape == slope.shape == (21, 21)
-    assert landing[0].max() == 0.0  # uy = 0: lands at the origin
-    assert landing[-1, -1] == pytest.approx(ballistics.landing_x(1.0, 1.0))
-    # Fig. 20: the landing is most sensitive for low, hard throws (small uy, large ux).
-    assert slope[1, -1] > slope[-1, 1]
-    with pytest.raises(ValueError, match="n must be"):
-        ballistics.landing_grid(1)
 
 
 @pytest.mark.parametrize("W", [-3.0, -1.0, 0.0, 0.5, 2.0])

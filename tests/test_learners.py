@@ -54,3 +54,14 @@ def test_bench_learner_smoke(capsys):
     assert "50x1 in, 50x1 act, 20-D" in out and "10x10 in, 8x1 act" in out and "30x1 in, 30x1 act" in out
     rows = [line.split() for line in out.splitlines() if line.startswith(("50x1", "10x10", "30x1"))]
     assert len(rows) == 8 and all(float(row[-1].rstrip("x")) > 0 for row in rows)
+
+
+@pytest.mark.parametrize("kind", learners.KINDS)
+def test_every_kind_is_layered_and_has_presets(kind):
+    from somarm import presets
+    from somarm.learner_base import ConfigBase, LearnerBase
+
+    config_class, learner_class = learners.LEARNERS[kind]
+    assert issubclass(config_class, ConfigBase) and issubclass(learner_class, LearnerBase)
+    assert learner_class.kind == kind and learner_class.config_class is config_class
+    assert isinstance(presets.config_for(kind, "table2"), config_class)

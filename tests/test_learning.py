@@ -7,8 +7,8 @@ untrained learner does, so a learner that stops learning fails them.
 import numpy as np
 import pytest
 
-from somarm import evaluation, training
-from somarm.training import RunConfig
+from somarm import evaluation, run, training
+from somarm.run import RunConfig
 
 
 def _greedy_error(result, seed=0):
@@ -18,8 +18,8 @@ def _greedy_error(result, seed=0):
 def test_reach2_greedy_error_falls_below_bound():
     # Table 1, 3 trials x 20,000 steps. Measured (this seed): greedy distance to fresh goals 0.026-0.041
     # (0.033 at 50,000 steps over 20 trials); untrained 0.45-0.97. Bound 0.08: twice the worst trial seen.
-    result = training.train(RunConfig(task="reach2", n_trials=3, n_steps=20_000, seed=1), progress=False)
-    untrained = training.train(RunConfig(task="reach2", n_trials=3, n_steps=1, seed=1), progress=False)
+    result = run.train(RunConfig(task="reach2", n_trials=3, n_steps=20_000, seed=1), progress=False)
+    untrained = run.train(RunConfig(task="reach2", n_trials=3, n_steps=1, seed=1), progress=False)
     error, before = _greedy_error(result), _greedy_error(untrained)
     assert before.mean() > 0.2
     assert error.mean() < 0.08, f"greedy reach2 error {error} after 20,000 steps"
@@ -28,7 +28,7 @@ def test_reach2_greedy_error_falls_below_bound():
 def test_throw_action_units_find_the_target():
     # Table 4, 4000 throws: measured greedy misses 0.001-0.058 (this seed); bound 0.1, against 2.2 for
     # a uniformly random throw.
-    result = training.train(RunConfig(task="throw", n_trials=3, n_steps=4000, seed=2), progress=False)
+    result = run.train(RunConfig(task="throw", n_trials=3, n_steps=4000, seed=2), progress=False)
     assert _greedy_error(result).max() < 0.1
 
 
@@ -39,7 +39,7 @@ def test_somq_beats_the_motoric_map_on_four_goals():
         RunConfig(task="four_goals", learner=kind, n_trials=3, n_steps=6000, seed=3, task_params=params)
         for kind in ("somq", "motoric")
     ]
-    somq, motoric = training.train_group(configs, progress=False)
+    somq, motoric = run.train_group(configs, progress=False)
     for phase in (somq.steps <= 3000, somq.steps > 3000):
         assert -somq.block_means[phase].mean() < -motoric.block_means[phase].mean()
 
@@ -47,6 +47,6 @@ def test_somq_beats_the_motoric_map_on_four_goals():
 @pytest.mark.slow
 def test_reach2_paper_scale_every_trial_near_mean():
     # Figs. 7-8 at the paper's scale: 20 trials x 50,000 steps; measured final errors 0.028-0.050.
-    result = training.train(RunConfig(task="reach2", n_trials=20, n_steps=50_000, seed=0), progress=False)
+    result = run.train(RunConfig(task="reach2", n_trials=20, n_steps=50_000, seed=0), progress=False)
     final = -training.final_rewards(result.block_means, result.config.block, 1000)
     assert np.median(final) < 0.05 and (final > 2 * np.median(final)).sum() <= 1

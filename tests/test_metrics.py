@@ -8,7 +8,7 @@ LINE5 = np.column_stack([np.arange(5), np.zeros(5)])
 
 def test_grid_distances_chebyshev():
     grid = np.array([[0, 0], [0, 1], [1, 1], [2, 3]])
-    d = metrics.grid_distances(grid)
+    d = metrics.chebyshev_distances(grid)
     assert d[0, 2] == 1 and d[0, 3] == 3 and d[1, 3] == 2
     np.testing.assert_array_equal(d, d.T)
 

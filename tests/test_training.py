@@ -3,8 +3,8 @@ import json
 import numpy as np
 import pytest
 
-from somarm import training
-from somarm.training import RunConfig
+from somarm import run
+from somarm.run import RunConfig
 
 
 def _tiny(**kwargs):
@@ -13,9 +13,9 @@ def _tiny(**kwargs):
 
 
 def test_same_seed_same_numbers_different_seed_differs():
-    a = training.train(_tiny(), progress=False)
-    b = training.train(_tiny(), progress=False)
-    c = training.train(_tiny(seed=4), progress=False)
+    a = run.train(_tiny(), progress=False)
+    b = run.train(_tiny(), progress=False)
+    c = run.train(_tiny(seed=4), progress=False)
     np.testing.assert_array_equal(a.block_means, b.block_means)
     np.testing.assert_array_equal(a.learner.q, b.learner.q)
     assert not np.array_equal(a.block_means, c.block_means)
@@ -23,15 +23,15 @@ def test_same_seed_same_numbers_different_seed_differs():
 
 
 def test_trial_alone_equals_trial_in_batch():
-    batch = training.train(_tiny(n_trials=3), progress=False)
+    batch = run.train(_tiny(n_trials=3), progress=False)
     # Trial 0 alone has trial index 0: the first column of the batch.
-    alone = training.train(_tiny(n_trials=1), progress=False)
+    alone = run.train(_tiny(n_trials=1), progress=False)
     np.testing.assert_array_equal(batch.block_means[:, 0], alone.block_means[:, 0])
 
 
 def test_replay_one_trial_of_a_batch_alone():
-    batch = training.train(_tiny(n_trials=3), progress=False)
-    alone = training.train(_tiny(n_trials=1, trial_ids=[2]), progress=False)
+    batch = run.train(_tiny(n_trials=3), progress=False)
+    alone = run.train(_tiny(n_trials=1, trial_ids=[2]), progress=False)
     np.testing.assert_array_equal(batch.block_means[:, 2], alone.block_means[:, 0])
     np.testing.assert_array_equal(batch.learner.q[2], alone.learner.q[0])
 
@@ -41,13 +41,13 @@ def test_group_in_lockstep_equals_separate_runs():
         _tiny(task="throw", n_steps=300),
         _tiny(task="throw", n_steps=300, n_trials=1, overrides={"neighbourhood_q": "false"}),
     ]
-    group = training.train_group(configs, progress=False)
+    group = run.train_group(configs, progress=False)
     for config, result in zip(configs, group, strict=True):
-        alone = training.train(config, progress=False)
+        alone = run.train(config, progress=False)
         np.testing.assert_array_equal(result.block_means, alone.block_means)
         np.testing.assert_array_equal(result.learner.action_weights, alone.learner.action_weights)
     with pytest.raises(ValueError, match="shares backend, steps and block"):
-        training.train_group([_tiny(), _tiny(n_steps=500)], progress=False)
+        run.train_group([_tiny(), _tiny(n_steps=500)], progress=False)
 
 
 def test_group_of_different_throw_tasks_equals_separate_runs():
@@ -60,15 +60,15 @@ def test_group_of_different_throw_tasks_equals_separate_runs():
         _tiny(task="throw_wind", n_steps=300),
         _tiny(task="throw_wind", n_steps=300, seed=8),  # another seed: independent trials, same step
     ]
-    group = training.train_group(configs, progress=False)
+    group = run.train_group(configs, progress=False)
     for config, result in zip(configs, group, strict=True):
-        alone = training.train(config, progress=False)
+        alone = run.train(config, progress=False)
         np.testing.assert_array_equal(result.block_means, alone.block_means)
         np.testing.assert_array_equal(result.block_sq_means, alone.block_sq_means)
         np.testing.assert_array_equal(result.learner.q, alone.learner.q)
         assert result.task.name == config.task
     with pytest.raises(ValueError, match="on_step needs a group on one task and seed"):
-        training.train_group(configs, progress=False, on_step=lambda *args: None)
+        run.train_group(configs, progress=False, on_step=lambda *args: None)
 
 
 def test_interrupt_leaves_valid_partial_run(tmp_path):
@@ -76,20 +76,20 @@ def test_interrupt_leaves_valid_partial_run(tmp_path):
         if step == 250:
             raise KeyboardInterrupt
 
-    result = training.train(_tiny(), progress=False, on_step=stop_at_250)
+    result = run.train(_tiny(), progress=False, on_step=stop_at_250)
     assert result.interrupted and result.steps_done == 250
     assert result.block_means.shape == (2, 2)
-    training.write_run(result, tmp_path, figures=False)
+    run.write(result, tmp_path, figures=False)
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["interrupted"] is True and summary["steps"] == 250 and summary["seed"] == 3
-    config, learner = training.load_run(tmp_path)
+    config, learner = run.load(tmp_path)
     assert config == result.config and learner.t == 250
     assert not list(tmp_path.glob("*.tmp"))
 
 
 def test_run_folder_round_trip_and_figures(tmp_path):
-    result = training.train(_tiny(), progress=False)
-    training.write_run(result, tmp_path)
+    result = run.train(_tiny(), progress=False)
+    run.write(result, tmp_path)
     names = {p.name for p in tmp_path.iterdir()}
     assert {
         "config.json",
@@ -103,7 +103,7 @@ def test_run_folder_round_trip_and_figures(tmp_path):
     curves = np.load(tmp_path / "curves.npz")
     np.testing.assert_array_equal(curves["block_means"], result.block_means)
     assert int(curves["seed"]) == 3
-    config, learner = training.load_run(tmp_path)
+    config, learner = run.load(tmp_path)
     np.testing.assert_array_equal(learner.q, result.learner.q)
 
 
@@ -123,11 +123,26 @@ def test_bad_run_settings_are_one_clear_error(kwargs, match):
 
 
 def test_parse_assignments():
-    assert training.parse_assignments(["a=1", " b = x "], "--set") == {"a": "1", "b": "x"}
+    assert run.parse_assignments(["a=1", " b = x "], "--set") == {"a": "1", "b": "x"}
     with pytest.raises(ValueError, match="KEY=VALUE"):
-        training.parse_assignments(["novalue"], "--set")
+        run.parse_assignments(["novalue"], "--set")
 
 
 def test_load_run_names_missing_file(tmp_path):
     with pytest.raises(ValueError, match="config.json is missing"):
-        training.load_run(tmp_path)
+        run.load(tmp_path)
+
+
+def test_every_run_setting_is_a_train_option():
+    import argparse
+    import dataclasses
+
+    from somarm.run_config import add_options, from_options
+
+    parser = argparse.ArgumentParser()
+    add_options(parser)
+    args = parser.parse_args(["reach2", "--steps", "300", "--trial-ids", "4", "7", "--set", "alpha=0.5"])
+    config = from_options(args)
+    assert {f.name for f in dataclasses.fields(RunConfig)} <= set(vars(args))
+    assert (config.n_steps, config.n_trials, config.trial_ids, config.overrides) == (300, 2, [4, 7], {"alpha": "0.5"})
+    assert config.preset == "table1" and config.block == 100  # the task's record and the field default

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from meshcat.commands import Delete, SetProperty
 
-from somarm.viewer.adapters import launcher_flight
+from somarm.tasks.throw import simulate_trajectory
 from somarm.viewer.client import MeshcatClient, Recorder
 from somarm.viewer.html import write_html
 from somarm.viewer.scene import path_of
@@ -220,7 +220,7 @@ def test_reach20_sweep_and_throw_fan_render(browser, server, tmp_path):
 
     launcher = load_model("launcher")
     fan = np.column_stack([np.linspace(0.35, 0.2, 6), np.linspace(0.2, 0.8, 6)])
-    throw = ThrowShow(launcher, lambda ux, uy: launcher_flight(launcher, ux, uy), n_balls=6)
+    throw = ThrowShow(launcher, lambda ux, uy: simulate_trajectory(ux, uy)[1], n_balls=6)
     client.send(Delete(path_of("/meshcat/reach20")).lower())
     client.send_batch(throw.setup() + throw.throw_commands(fan, 4.0))
     page = open_page(browser, server.web_url)

@@ -234,7 +234,7 @@ def test_arm_show_error_is_the_tasks_reward_and_the_tip_is_mujocos_site():
     tasks = pytest.importorskip("somarm.tasks")
     if not hasattr(tasks, "make"):
         pytest.skip("somarm.tasks.make is not in the repository yet")
-    from somarm.viewer.live import own_task
+    from somarm.viewer.feed import own_task
     from somarm.viewer.shows import show_for_task
 
     rng = np.random.default_rng(5)

@@ -309,10 +309,10 @@ def test_live_view_rejects_bad_arguments():
 
 def _tasks_ready() -> bool:
     try:
-        from somarm import tasks, training  # noqa: F401
+        from somarm import run, tasks  # noqa: F401
     except ImportError:
         return False
-    return hasattr(tasks, "make") and hasattr(training, "build")
+    return hasattr(tasks, "make") and hasattr(run, "make")
 
 
 needs_tasks = pytest.mark.skipif(not _tasks_ready(), reason="somarm.tasks.make is not in the repository yet")

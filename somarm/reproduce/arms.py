@@ -16,7 +16,7 @@ from somarm.reproduce.common import (
     typical_trial,
 )
 from somarm.reproduce.report import Claim, Section
-from somarm.training import RunConfig
+from somarm.run import RunConfig
 
 __all__ = ["reach2", "reach20", "four_goals"]
 

@@ -1,4 +1,4 @@
-"""What every experiment shares: the run context, training through ``somarm.training``, helpers."""
+"""What every experiment shares: the run context, training through ``somarm.run``, helpers."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from somarm import plots, training
-from somarm.training import RunConfig, RunResult
+from somarm import plots
+from somarm.run import RunConfig, RunResult, final_rewards, train_group
 
 __all__ = [
     "Context",
@@ -78,7 +78,7 @@ def run_group(
     if (label, ctx.seed) not in ctx.trained:
         seeds = ctx.seeds or (ctx.seed,)
         group = [dataclasses.replace(c, seed=s, backend=ctx.backend) for s in seeds for c in configs]
-        results = training.train_group(group, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+        results = train_group(group, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
         if any(result.interrupted for result in results):
             raise KeyboardInterrupt
         for i, s in enumerate(seeds):
@@ -109,7 +109,7 @@ MOTORIC_CHOICE = (
 
 def final_error(result: RunResult, window: int) -> np.ndarray:
     """Each trial's mean error (minus reward) over the last ``window`` steps, ``(n_trials,)``."""
-    return -training.final_rewards(result.block_means, result.config.block, window)
+    return -final_rewards(result.block_means, result.config.block, window)
 
 
 def typical_trial(errors: np.ndarray) -> int:

@@ -7,7 +7,7 @@ import numpy as np
 from somarm import ballistics, evaluation, metrics, plots
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, run_group, typical_trial
 from somarm.reproduce.report import Claim, Section
-from somarm.training import RunConfig
+from somarm.run import RunConfig
 
 __all__ = ["throw", "throw_maps", "neighbourhood_q", "more_inputs"]
 
@@ -36,7 +36,6 @@ def _landing(ux: np.ndarray, uy: np.ndarray, *, backend: str, **env) -> np.ndarr
 
 def throw(ctx: Context) -> Section:
     """Figs. 16-20: a single state, target X = 4, Table 4, 4000 throws."""
-    from somarm.tasks import launcher
     from somarm.tasks import throw as throw_task
 
     n_trials = ctx.pick(20, 4)
@@ -127,7 +126,7 @@ def throw(ctx: Context) -> Section:
     i = typical_trial(final_error(result, 400))
     fig, ax = plt.subplots(figsize=(7, 3.8))
     for point, colour in ((valid[len(valid) // 6], "C0"), (valid[-len(valid) // 6], "C3")):
-        _, xy = launcher.simulate_trajectory(point[0], point[1], throw_task.ThrowParams(**TABLE3))
+        _, xy = throw_task.simulate_trajectory(point[0], point[1], throw_task.ThrowParams(**TABLE3))
         ax.plot(xy[:, 0], xy[:, 1], color=colour, label=f"u = ({point[0]:.2f}, {point[1]:.2f})")
     ax.axhline(0, color="k", lw=0.8)
     ax.plot([TARGET_X], [0], "kv", ms=9, label="target X = 4")

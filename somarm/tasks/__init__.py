@@ -8,45 +8,49 @@ Two interfaces to the same tasks:
   for experiments, evaluated in MuJoCo (default) or by the closed forms (``backend="analytic"``).
 
 Episode k of ``load(name, seed=s)`` sees the same observation as trial 0 at step k of
-``make(name, seed=s)``. MuJoCo and dm_control load only when a task is built.
+``make(name, seed=s)``. Each task module registers its tasks as ``TaskRecord``s in its
+``RECORDS``; everything else (run defaults, figures, viewer) reads the records. Importing this
+package is light: the task modules, and with them MuJoCo and dm_control, load on first use.
 """
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
-__all__ = ["names", "describe", "params_type", "load", "make", "set_threads"]
+from somarm.tasks.record import TaskRecord, parse_values
 
-# name -> (one-line description, module of the task, params class name, allowed parameters)
-_TASKS: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
-    "reach2": ("2-link arm reaches a goal on a circle (Fig. 5); obs goal (x, y), action 2 angles",
-               "reach", "ReachParams", ("centre_x", "centre_y", "radius")),
-    "reach20": ("20-link arm reaches a goal on a circle (Fig. 11); obs goal (x, y), action 20 angles",
-                "reach", "ReachParams", ("centre_x", "centre_y", "radius")),
-    "four_goals": ("2-link arm, obs in the unit square, one goal per quadrant, goals move (Fig. 12)",
-                   "four_goals", "FourGoalsParams", ("switch_step", "goals_before", "goals_after")),
-    "throw": ("throw at target X = 4, a single state (Table 3); action (ux, uy) in [0, 1]^2",
-              "throw", "ThrowParams", ("M", "G", "Fr", "W", "X", "punish_low", "tolerance")),
-    "throw_distance": ("Table 6 A: target X in [0, 9] observed; action (ux, uy)",
-                       "throw", "ThrowParams", ("M", "G", "Fr", "W", "punish_low", "tolerance")),
-    "throw_wind": ("Table 6 B: X in [0, 9], wind W in [-3, 0] observed; action (ux, uy)",
-                   "throw", "ThrowParams", ("M", "G", "Fr", "punish_low", "tolerance")),
-    "throw_friction": ("Table 6 C: X, W, friction Fr in [0, 0.2] observed; action (ux, uy)",
-                       "throw", "ThrowParams", ("M", "G", "punish_low", "tolerance")),
-    "throw_mass": ("Table 6 D: X, W, Fr, mass M in [1, 2] observed; action (ux, uy)",
-                   "throw", "ThrowParams", ("G", "punish_low", "tolerance")),
-}
+__all__ = ["names", "describe", "record", "records", "params_type", "parse_values", "load", "make",
+           "set_threads", "TaskRecord"]
+
+#: The modules holding task records (each defines ``RECORDS``); a new task module adds one line.
+_MODULES = ("reach", "four_goals", "throw")
+_RECORDS: dict[str, TaskRecord] = {}
+
+
+def records() -> dict[str, TaskRecord]:
+    """Every registered task's record by name (imports the task modules, and MuJoCo, on first use)."""
+    if not _RECORDS:
+        for module in _MODULES:
+            for entry in importlib.import_module(f"somarm.tasks.{module}").RECORDS:
+                _RECORDS[entry.name] = entry
+    return _RECORDS
 
 
 def names() -> list[str]:
     """Names of the registered tasks."""
-    return list(_TASKS)
+    return list(records())
 
 
-def _entry(name: str) -> tuple[str, str, str, tuple[str, ...]]:
-    if name not in _TASKS:
-        raise ValueError(f"unknown task {name!r}; tasks: {', '.join(_TASKS)}")
-    return _TASKS[name]
+def record(name: str) -> TaskRecord:
+    """The record of task ``name``: the one place an unknown task name is reported.
+
+    Raises:
+      ValueError: unknown name (the names are listed).
+    """
+    if name not in records():
+        raise ValueError(f"unknown task {name!r}; tasks: {', '.join(records())}")
+    return _RECORDS[name]
 
 
 def describe(name: str) -> str:
@@ -55,28 +59,12 @@ def describe(name: str) -> str:
     Raises:
       ValueError: unknown name (the names are listed).
     """
-    return _entry(name)[0]
+    return record(name).summary
 
 
 def params_type(name: str) -> type:
     """The frozen dataclass holding task ``name``'s parameters."""
-    import importlib
-
-    _, module, cls, _ = _entry(name)
-    return getattr(importlib.import_module(f"somarm.tasks.{module}"), cls)
-
-
-def _params(name: str, given: dict[str, Any]):
-    allowed = _entry(name)[3]
-    unknown = sorted(set(given) - set(allowed))
-    if unknown:
-        raise ValueError(f"unknown parameter(s) {', '.join(unknown)} for task {name}; "
-                         f"its parameters: {', '.join(allowed)}")
-    kind = params_type(name)
-    try:
-        return kind(**given)
-    except TypeError as exc:  # pragma: no cover - the allowed names are all fields
-        raise ValueError(f"bad parameters for task {name}: {exc}") from None
+    return record(name).params
 
 
 def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend: str = "mujoco",
@@ -94,15 +82,9 @@ def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend
     Raises:
       ValueError: unknown task, unknown parameter, parameter out of range, unknown backend.
     """
-    from somarm.tasks import four_goals, reach, throw
-
-    p = _params(name, params)
-    kwargs = {"n_trials": n_trials, "seed": seed, "trial_ids": trial_ids, "backend": backend}
-    if name in ("reach2", "reach20"):
-        return reach.Reach(p, n_links=int(name[5:]), **kwargs)
-    if name == "four_goals":
-        return four_goals.FourGoals(p, **kwargs)
-    return throw.Throw(p, name=name, **kwargs)
+    entry = record(name)
+    return entry.make(entry.params_from(params), n_trials=n_trials, seed=seed, trial_ids=trial_ids,
+                      backend=backend)
 
 
 def load(name: str, *, seed: int = 0, **params: Any):
@@ -120,20 +102,12 @@ def load(name: str, *, seed: int = 0, **params: Any):
     """
     from dm_control.rl import control
 
-    from somarm.tasks import arms, four_goals, launcher, reach
-
-    batched = make(name, seed=seed, **params)
-    if name in ("reach2", "reach20"):
-        physics, task = arms.load_physics(batched.n_links), reach.ReachEnvTask(batched)
-    elif name == "four_goals":
-        physics, task = arms.load_physics(2), four_goals.FourGoalsEnvTask(batched)
-    else:
-        physics, task = launcher.load_physics(batched.params), launcher.ThrowEnvTask(batched)
+    physics, task = record(name).environment(make(name, seed=seed, **params))
     return control.Environment(physics, task, n_sub_steps=1)
 
 
 def set_threads(n: int) -> None:
-    """Threads the MuJoCo backend uses for large batches (default 2, this machine's cores).
+    """Threads the MuJoCo backend uses for large batches (default 2).
 
     Raises:
       ValueError: ``n`` is not a whole number >= 1.

@@ -9,13 +9,13 @@ large batches are shared between threads (MuJoCo releases the GIL).
 from __future__ import annotations
 
 import threading
-from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
 from somarm.tasks.assets import ARM20_LINK_LENGTH, model_path
+from somarm.tasks.pool import shared_pool
 
 __all__ = ["LINK_LENGTHS", "ArmPhysics", "ArmBatch", "fingertips"]
 
@@ -24,7 +24,7 @@ LINK_LENGTHS: dict[int, np.ndarray] = {2: np.array([0.4, 0.4]), 20: np.full(20, 
 _MODELS = {2: "arm2", 20: "arm20"}
 #: Arms per batch model: enough to hide Python's per-call cost (the 20-link arm needs fewer).
 _COPIES = {2: 128, 20: 32}
-#: Threads for batches of more than 512 arms (this machine has 2 cores); see ``tasks.set_threads``.
+#: Threads for batches of more than 512 arms (2 by default: a small machine); see ``tasks.set_threads``.
 THREADS = 2
 
 
@@ -102,8 +102,6 @@ class ArmBatch:
 
 
 _local = threading.local()
-_pools: dict[int, ThreadPoolExecutor] = {}
-_pools_lock = threading.Lock()
 
 
 def _batch(n_links: int) -> ArmBatch:
@@ -139,10 +137,7 @@ def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int | None = None
     if workers <= 1:
         _batch(n_links).fingertips(flat, out)
     else:
-        with _pools_lock:
-            if workers not in _pools:
-                _pools[workers] = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="somarm-arms")
-            pool = _pools[workers]
+        pool = shared_pool(workers)
         bounds = np.linspace(0, len(flat), workers + 1).astype(int)
         futures = [pool.submit(lambda a, b: _batch(n_links).fingertips(flat[a:b], out[a:b]), a, b)
                    for a, b in zip(bounds[:-1], bounds[1:], strict=True)]

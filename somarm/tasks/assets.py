@@ -2,7 +2,8 @@
 
 The models sit in the top-level ``models/`` folder of a source checkout and ship as the
 package data ``somarm.models`` in an installed wheel; ``model_path`` finds either.
-dm_control is imported only inside ``arm_mjcf``, so finding a path stays light.
+MuJoCo is imported only inside ``load_model`` and dm_control only inside ``arm_mjcf``, so
+finding a path stays light.
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    import mujoco
     from dm_control import mjcf
 
-__all__ = ["MODEL_NAMES", "ARM20_LINK_LENGTH", "model_path", "arm_mjcf", "arm20_xml"]
+__all__ = ["MODEL_NAMES", "ARM20_LINK_LENGTH", "model_path", "load_model", "arm_mjcf", "arm20_xml"]
 
 #: The MJCF models of this project (``models/NAME.xml``).
 MODEL_NAMES: tuple[str, ...] = ("arm2", "arm20", "launcher")
@@ -62,6 +64,17 @@ def model_path(name: str) -> Path:
     if installed is None or not installed.is_file():
         raise ValueError(f"model {name}.xml not found in {_SOURCE_MODELS} nor in package somarm.models")
     return installed
+
+
+def load_model(name: str) -> mujoco.MjModel:
+    """The compiled MJCF model ``name`` (``arm2``, ``arm20``, ``launcher``).
+
+    Raises:
+      ValueError: unknown name or a missing file (as ``model_path``).
+    """
+    import mujoco
+
+    return mujoco.MjModel.from_xml_path(str(model_path(name)))
 
 
 def arm_mjcf(n_links: int, link_length: float, *, name: str | None = None) -> mjcf.RootElement:

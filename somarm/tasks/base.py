@@ -94,6 +94,16 @@ class OneStepTask:
     def action_dim(self) -> int:
         return int(self.action_low.size)
 
+    def set_step(self, t: int) -> None:
+        """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase).
+
+        Raises:
+          ValueError: ``t`` is not a whole number >= 0.
+        """
+        if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or t < 0:
+            raise ValueError(f"t must be a whole number >= 0, got {t!r}")
+        self.t = int(t)
+
     # -- what a task defines -------------------------------------------------------------
     def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
         """Observations ``(n, obs_dim)`` from rows of uniforms ``(n, uniform_width)``."""

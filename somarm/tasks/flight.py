@@ -37,19 +37,19 @@ from __future__ import annotations
 
 import math
 import threading
-from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
 from somarm.tasks.assets import model_path
+from somarm.tasks.pool import shared_pool
 
 __all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "SCALED_STEP", "error_bound", "step_for", "fly",
            "max_steps_for", "ProjectileBatch", "landing_x"]
 
-#: This project's bound on the landing error of one throw, used to pick its RK4 step: half the
-#: issue's 1e-6, and about twice what the largest errors measured over Table 6's box reach.
+#: This project's bound on the landing error of one throw, used to pick its RK4 step: half of
+#: 1e-6, and about twice what the largest errors measured over Table 6's box reach.
 DEFAULT_TOLERANCE = 5e-7
 #: The steps a throw may use, largest first (round values, so that flight times of round u_y
 #: fall on whole steps, the case where interpolation error hides; the tests use random u_y).
@@ -65,7 +65,7 @@ _STEP_COST = 10.0
 _SIZES = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256)
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
-#: Threads for batches of more than one chunk (this machine has 2 cores); see ``tasks.set_threads``.
+#: Threads for batches of more than one chunk (2 by default: a small machine); see ``tasks.set_threads``.
 THREADS = 2
 
 
@@ -262,8 +262,6 @@ class ProjectileBatch:
 
 
 _local = threading.local()
-_pools: dict[int, ThreadPoolExecutor] = {}
-_pools_lock = threading.Lock()
 
 
 def _batch_for_thread(n: int, G: float) -> ProjectileBatch:
@@ -350,10 +348,7 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
         w = load.index(min(load))
         shares[w].append(chunks[i])
         load[w] += cost[i]
-    with _pools_lock:
-        if workers not in _pools:
-            _pools[workers] = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="somarm-flight")
-        pool = _pools[workers]
+    pool = shared_pool(workers)
     futures = [pool.submit(_run_chunks, share, flat, out, G) for share in shares[1:]]
     _run_chunks(shares[0], flat, out, G)  # the calling thread takes a share too
     for future in futures:

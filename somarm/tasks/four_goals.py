@@ -15,9 +15,11 @@ import numpy as np
 
 from somarm.tasks import arms
 from somarm.tasks.base import OneStepTask
-from somarm.tasks.reach import ArmEnvTask, _tip
+from somarm.tasks.reach import ARM_ACTION_LABELS, ArmEnvTask, _tip
+from somarm.tasks.record import TaskRecord
 
-__all__ = ["GOALS_BEFORE", "GOALS_AFTER", "FourGoalsParams", "FourGoals", "FourGoalsEnvTask", "quadrants"]
+__all__ = ["GOALS_BEFORE", "GOALS_AFTER", "FourGoalsParams", "FourGoals", "FourGoalsEnvTask", "quadrants",
+           "RECORDS"]
 
 #: Goals before the move, ordered top-left, top-right, bottom-left, bottom-right quadrant.
 GOALS_BEFORE: tuple[tuple[float, float], ...] = ((0.3, 0.7), (0.7, 0.7), (0.3, 0.3), (0.7, 0.3))
@@ -79,12 +81,6 @@ class FourGoals(OneStepTask):
         self.action_low, self.action_high = np.full(2, -np.pi), np.full(2, np.pi)
         super().__init__(params, **kwargs)
 
-    def set_step(self, t: int) -> None:
-        """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase)."""
-        if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or t < 0:
-            raise ValueError(f"t must be a whole number >= 0, got {t!r}")
-        self.t = int(t)
-
     def goals_for(self, observations: np.ndarray) -> np.ndarray:
         """The goal ``(..., 2)`` of each observation in the current phase."""
         return self.params.goals(self.t)[quadrants(observations)]
@@ -105,3 +101,20 @@ class FourGoalsEnvTask(ArmEnvTask):
 
     def apply_observation(self, physics: arms.ArmPhysics, observation: np.ndarray) -> None:
         physics.set_goal(self.batched.goals_for(observation))
+
+
+RECORDS = (
+    TaskRecord(
+        name="four_goals",
+        summary="2-link arm, obs in the unit square, one goal per quadrant, goals move (Fig. 12)",
+        params=FourGoalsParams,
+        settable=("switch_step", "goals_before", "goals_after"),
+        make=FourGoals,
+        environment=lambda batched: (arms.load_physics(2), FourGoalsEnvTask(batched)),
+        preset="table2",
+        n_steps=40_000,
+        model="arm2",
+        observation_labels=("input x", "input y"),
+        action_labels=ARM_ACTION_LABELS,
+    ),
+)

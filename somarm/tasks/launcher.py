@@ -1,4 +1,4 @@
-"""The launcher model in dm_control: one projectile, its target, and the throw tasks' dm_env side."""
+"""The launcher model in dm_control: one projectile and its target (physics only; the task is in ``throw``)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,8 @@ from dm_control import mujoco as dm_mujoco
 
 from somarm.tasks import flight
 from somarm.tasks.assets import model_path
-from somarm.tasks.base import OneStepEnvTask
-from somarm.tasks.throw import TABLE3, Throw, ThrowParams, _check_velocities, throw_rewards
 
-__all__ = ["LauncherPhysics", "ThrowEnvTask", "load_physics", "simulate_trajectory"]
+__all__ = ["LauncherPhysics", "load_physics", "trajectory"]
 
 
 class LauncherPhysics(dm_mujoco.Physics):
@@ -37,13 +35,6 @@ class LauncherPhysics(dm_mujoco.Physics):
 
     def set_target(self, X: float) -> None:
         self.named.data.mocap_pos["target", 0] = X
-
-    def target(self) -> float:
-        return float(self.named.data.mocap_pos["target", 0])
-
-    def projectile_position(self) -> np.ndarray:
-        """(x, height) of the projectile."""
-        return np.array([self.named.data.qpos["x"], self.named.data.qpos["height"]]).ravel()
 
     def launch(self, ux: float, uy: float, *, step: float) -> tuple[np.ndarray, np.ndarray]:
         """Put the projectile at the origin with velocity (ux, uy), to fly with RK4 step ``step``.
@@ -81,70 +72,28 @@ class LauncherPhysics(dm_mujoco.Physics):
                           history=history, scale=getattr(self, "_scale", 1.0))
 
 
-def load_physics(params: ThrowParams = TABLE3) -> LauncherPhysics:
-    """The launcher physics with the gravity, drag, wind and mass of ``params``."""
+def load_physics(G: float = 0.05) -> LauncherPhysics:
+    """The launcher physics with gravity ``G`` (Table 3's by default) and the model's drag and mass."""
     physics = LauncherPhysics.from_xml_path(str(model_path("launcher")))
-    physics.model.opt.gravity[:] = (0.0, 0.0, -params.G)
-    physics.set_conditions(Fr=params.Fr, W=params.W, M=params.M)
+    physics.model.opt.gravity[:] = (0.0, 0.0, -G)
+    physics.set_conditions(Fr=float(physics.named.model.dof_damping["x"]), W=0.0,
+                           M=float(physics.named.model.body_mass["projectile"]))
     return physics
 
 
-def simulate_trajectory(ux: float, uy: float, params: ThrowParams = TABLE3, *,
-                        dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """One throw simulated in MuJoCo, for animation: every step, ending at the landing point.
-
-    Args:
-      ux, uy: launch velocity in [0, 1].
-      params: the environment (G, Fr, W, M, X; the tolerance picks the step when ``dt`` is None).
-      dt: RK4 step; default: the step the tasks use for this throw (``flight.step_for``).
+def trajectory(ux: float, uy: float, *, G: float, Fr: float, W: float, M: float, X: float,
+               step: float) -> tuple[np.ndarray, np.ndarray]:
+    """One throw stepped with RK4 step ``step`` until it lands (checked velocities; see
+    ``somarm.tasks.throw.simulate_trajectory``).
 
     Returns:
       ``(times (T,), xy (T, 2))``: time and (x, height) at launch, after every step, and at the
       located landing point (the last row, height 0).
-
-    Raises:
-      ValueError: velocities outside [0, 1] or a step that is not > 0.
     """
-    ux_a, uy_a = _check_velocities(ux, uy)
-    if ux_a.shape != ():
-        raise ValueError(f"ux and uy must be single numbers, got shape {ux_a.shape}")
-    step = float(flight.step_for(ux_a, params.W, params.Fr / params.M, tolerance=params.tolerance))
-    if dt is not None:
-        if not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be a number > 0, got {dt!r}")
-        step = float(dt)
-    physics = load_physics(params)
-    physics.set_conditions(Fr=params.Fr, W=params.W, M=params.M)
-    physics.set_target(params.X)
-    physics.launch(float(ux_a), float(uy_a), step=step)
+    physics = load_physics(G)
+    physics.set_conditions(Fr=Fr, W=W, M=M)
+    physics.set_target(X)
+    physics.launch(ux, uy, step=step)
     _, times, qpos = physics.fly(history=True)
     x, z = physics._dofs()
     return times, np.stack([qpos[:, x[0]], qpos[:, z[0]]], axis=-1)
-
-
-class ThrowEnvTask(OneStepEnvTask):
-    """dm_env side of the throw tasks: launch, fly in MuJoCo until the landing, reward."""
-
-    def __init__(self, batched: Throw):
-        super().__init__(batched, observation_key="conditions")
-        self._conditions: dict = {}
-
-    def apply_observation(self, physics: LauncherPhysics, observation: np.ndarray) -> None:
-        c = self.batched.conditions(observation)
-        self._conditions = {k: float(v) for k, v in c.items()}
-        physics.set_conditions(Fr=self._conditions["Fr"], W=self._conditions["W"], M=self._conditions["M"])
-        physics.set_target(self._conditions["X"])
-
-    def apply_action(self, physics: LauncherPhysics, action: np.ndarray) -> None:
-        c = self._conditions
-        self._velocity = (float(action[0]), float(action[1]))
-        step = float(flight.step_for(self._velocity[0], c["W"], c["Fr"] / c["M"],
-                                     tolerance=self.batched.params.tolerance))
-        self._launch = physics.launch(*self._velocity, step=step)
-
-    def reward_from_physics(self, physics: LauncherPhysics, observation: np.ndarray) -> float:
-        # physics.step took the first step of the flight; fly on from there until the landing.
-        landing = float(physics.fly(previous=self._launch)[0])
-        ux, uy = self._velocity
-        return float(throw_rewards(landing, self._conditions["X"], ux, uy,
-                                   punish_low=self.batched.params.punish_low))

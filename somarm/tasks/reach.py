@@ -16,8 +16,10 @@ import numpy as np
 from somarm import kinematics
 from somarm.tasks import arms
 from somarm.tasks.base import OneStepEnvTask, OneStepTask
+from somarm.tasks.record import TaskRecord
 
-__all__ = ["ReachParams", "Reach", "ReachEnvTask", "ArmEnvTask", "fingertips", "goal_circle_points"]
+__all__ = ["ReachParams", "Reach", "ReachEnvTask", "ArmEnvTask", "RECORDS", "ARM_ACTION_LABELS", "fingertips",
+           "goal_circle_points"]
 
 fingertips = arms.fingertips
 
@@ -110,3 +112,32 @@ class ReachEnvTask(ArmEnvTask):
 
     def apply_observation(self, physics: arms.ArmPhysics, observation: np.ndarray) -> None:
         physics.set_goal(observation)
+
+
+#: Axis labels of an arm's first two (normalised) joint angles in the run figures.
+ARM_ACTION_LABELS = ("theta1 (normalised from [-pi, pi])", "theta2 (normalised)")
+
+
+def _reach_environment(batched: Reach) -> tuple[arms.ArmPhysics, ReachEnvTask]:
+    return arms.load_physics(batched.n_links), ReachEnvTask(batched)
+
+
+def _record(n_links: int, figure: str) -> TaskRecord:
+    return TaskRecord(
+        name=f"reach{n_links}",
+        summary=f"{n_links}-link arm reaches a goal on a circle ({figure}); obs goal (x, y), "
+                f"action {n_links} angles",
+        params=ReachParams,
+        settable=("centre_x", "centre_y", "radius"),
+        make=lambda params, **kwargs: Reach(params, n_links=n_links, **kwargs),
+        environment=_reach_environment,
+        preset="table1",
+        n_steps=50_000,
+        model=f"arm{n_links}",
+        observation_labels=("goal x", "goal y"),
+        action_labels=ARM_ACTION_LABELS,
+        view="sweep" if n_links == 20 else "goals",
+    )
+
+
+RECORDS = (_record(2, "Fig. 5"), _record(20, "Fig. 11"))

@@ -21,11 +21,12 @@ import math
 import numpy as np
 
 from somarm import ballistics
-from somarm.tasks import flight
-from somarm.tasks.base import OneStepTask, check_actions
+from somarm.tasks import flight, launcher
+from somarm.tasks.base import OneStepEnvTask, OneStepTask, check_actions
+from somarm.tasks.record import TaskRecord
 
-__all__ = ["RANGES", "VARIED", "TABLE3", "ThrowParams", "Throw", "landing_x", "simulate_trajectory",
-           "throw_rewards"]
+__all__ = ["RANGES", "VARIED", "TABLE3", "ThrowParams", "Throw", "ThrowEnvTask", "RECORDS", "landing_x",
+           "simulate_trajectory", "throw_rewards"]
 
 #: Table 6's ranges of the varied parameters.
 RANGES: dict[str, tuple[float, float]] = {"X": (0.0, 9.0), "W": (-3.0, 0.0), "Fr": (0.0, 0.2), "M": (1.0, 2.0)}
@@ -100,6 +101,11 @@ def landing_x(ux, uy, *, params: ThrowParams = TABLE3, Fr=None, W=None, M=None,
       ValueError: velocities outside [0, 1], NaN or inf, Fr < 0, M <= 0, or an unknown backend.
     """
     ux, uy = _check_velocities(ux, uy)
+    return _landing(ux, uy, params=params, Fr=Fr, W=W, M=M, backend=backend)
+
+
+def _landing(ux: np.ndarray, uy: np.ndarray, *, params: ThrowParams, Fr, W, M, backend: str) -> np.ndarray:
+    """``landing_x`` for velocities already checked (the task's step checks its actions once)."""
     Fr = params.Fr if Fr is None else _check_condition("Fr", Fr, lambda v: v >= 0, ">= 0")
     W = params.W if W is None else _check_condition("W", W, lambda v: np.isfinite(v), "finite")
     M = params.M if M is None else _check_condition("M", M, lambda v: v > 0, "> 0")
@@ -112,13 +118,32 @@ def landing_x(ux, uy, *, params: ThrowParams = TABLE3, Fr=None, W=None, M=None,
 
 def simulate_trajectory(ux: float, uy: float, params: ThrowParams | None = None, *,
                         dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """One throw through MuJoCo for animation: ``(times (T,), xy (T, 2))``, ending at the landing.
+    """One throw simulated in MuJoCo, for animation: every step, ending at the landing point.
 
-    See ``somarm.tasks.launcher.simulate_trajectory``; ``params`` None means Table 3.
+    Args:
+      ux, uy: launch velocity in [0, 1].
+      params: the environment (G, Fr, W, M, X; the tolerance picks the step when ``dt`` is None);
+        None means Table 3.
+      dt: RK4 step; default: the step the tasks use for this throw (``flight.step_for``).
+
+    Returns:
+      ``(times (T,), xy (T, 2))``: time and (x, height) at launch, after every step, and at the
+      located landing point (the last row, height 0).
+
+    Raises:
+      ValueError: velocities outside [0, 1] or a step that is not > 0.
     """
-    from somarm.tasks import launcher  # launcher imports this module: import when called
-
-    return launcher.simulate_trajectory(ux, uy, TABLE3 if params is None else params, dt=dt)
+    params = TABLE3 if params is None else params
+    ux_a, uy_a = _check_velocities(ux, uy)
+    if ux_a.shape != ():
+        raise ValueError(f"ux and uy must be single numbers, got shape {ux_a.shape}")
+    step = float(flight.step_for(ux_a, params.W, params.Fr / params.M, tolerance=params.tolerance))
+    if dt is not None:
+        if not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a number > 0, got {dt!r}")
+        step = float(dt)
+    return launcher.trajectory(float(ux_a), float(uy_a), G=params.G, Fr=params.Fr, W=params.W, M=params.M,
+                               X=params.X, step=step)
 
 
 def throw_rewards(landing: np.ndarray, X, ux, uy, *, punish_low: bool) -> np.ndarray:
@@ -155,16 +180,6 @@ class Throw(OneStepTask):
         for i, key in enumerate(self.varied):
             values[key] = observations[..., i]
         return values
-
-    def params_for(self, observation: np.ndarray) -> ThrowParams:
-        """The full environment of one observation ``(obs_dim,)``: the params with the drawn fields."""
-        observation = np.asarray(observation, dtype=np.float64).reshape(-1)
-        return dataclasses.replace(self.params, **{k: float(observation[i]) for i, k in enumerate(self.varied)})
-
-    def target_positions(self, observations: np.ndarray) -> np.ndarray:
-        """Target X of each observation ``(..., obs_dim) -> (...)``."""
-        observations = np.asarray(observations, dtype=np.float64)
-        return np.broadcast_to(self.conditions(observations)["X"], observations.shape[:-1]).copy()
 
     def reachable(self, observations: np.ndarray) -> np.ndarray:
         """Whether each observation's target lies within reach of the velocity square."""
@@ -233,5 +248,68 @@ class Throw(OneStepTask):
     def rewards(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
         c = self.conditions(observations)
         ux, uy = actions[..., 0], actions[..., 1]
-        landing = landing_x(ux, uy, params=self.params, Fr=c["Fr"], W=c["W"], M=c["M"], backend=self.backend)
+        landing = _landing(ux, uy, params=self.params, Fr=c["Fr"], W=c["W"], M=c["M"], backend=self.backend)
         return throw_rewards(landing, c["X"], ux, uy, punish_low=self.params.punish_low)
+
+
+class ThrowEnvTask(OneStepEnvTask):
+    """dm_env side of the throw tasks: launch, fly in MuJoCo until the landing, reward."""
+
+    def __init__(self, batched: Throw):
+        super().__init__(batched, observation_key="conditions")
+        self._conditions: dict = {}
+
+    def apply_observation(self, physics: launcher.LauncherPhysics, observation: np.ndarray) -> None:
+        c = self.batched.conditions(observation)
+        self._conditions = {k: float(v) for k, v in c.items()}
+        physics.set_conditions(Fr=self._conditions["Fr"], W=self._conditions["W"], M=self._conditions["M"])
+        physics.set_target(self._conditions["X"])
+
+    def apply_action(self, physics: launcher.LauncherPhysics, action: np.ndarray) -> None:
+        c = self._conditions
+        self._velocity = (float(action[0]), float(action[1]))
+        step = float(flight.step_for(self._velocity[0], c["W"], c["Fr"] / c["M"],
+                                     tolerance=self.batched.params.tolerance))
+        self._launch = physics.launch(*self._velocity, step=step)
+
+    def reward_from_physics(self, physics: launcher.LauncherPhysics, observation: np.ndarray) -> float:
+        # physics.step took the first step of the flight; fly on from there until the landing.
+        landing = float(physics.fly(previous=self._launch)[0])
+        ux, uy = self._velocity
+        return float(throw_rewards(landing, self._conditions["X"], ux, uy,
+                                   punish_low=self.batched.params.punish_low))
+
+
+#: Axis labels of the varied parameters and of the launch velocity in the run figures.
+_LABELS = {"X": "target X", "W": "wind W", "Fr": "friction Fr", "M": "mass M"}
+_ACTION_LABELS = ("u_x (horizontal speed)", "u_y (vertical speed)")
+_SUMMARIES = {
+    "throw": "throw at target X = 4, a single state (Table 3); action (ux, uy) in [0, 1]^2",
+    "throw_distance": "Table 6 A: target X in [0, 9] observed; action (ux, uy)",
+    "throw_wind": "Table 6 B: X in [0, 9], wind W in [-3, 0] observed; action (ux, uy)",
+    "throw_friction": "Table 6 C: X, W, friction Fr in [0, 0.2] observed; action (ux, uy)",
+    "throw_mass": "Table 6 D: X, W, Fr, mass M in [1, 2] observed; action (ux, uy)",
+}
+_RUNS = {"throw": ("table4", 4_000), "throw_distance": ("table5", 10_000), "throw_wind": ("table7", 20_000),
+         "throw_friction": ("table7", 20_000), "throw_mass": ("table7", 20_000)}
+
+
+def _record(name: str) -> TaskRecord:
+    varied = VARIED[name]
+    return TaskRecord(
+        name=name,
+        summary=_SUMMARIES[name],
+        params=ThrowParams,
+        settable=tuple(f.name for f in dataclasses.fields(ThrowParams) if f.name not in varied),
+        make=lambda params, **kwargs: Throw(params, name=name, **kwargs),
+        environment=lambda batched: (launcher.load_physics(batched.params.G), ThrowEnvTask(batched)),
+        preset=_RUNS[name][0],
+        n_steps=_RUNS[name][1],
+        model="launcher",
+        observation_labels=tuple(_LABELS[v] for v in varied) or (_LABELS["X"],),
+        action_labels=_ACTION_LABELS,
+        view="fan" if name == "throw" else "goals",
+    )
+
+
+RECORDS = tuple(_record(name) for name in VARIED)

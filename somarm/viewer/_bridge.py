@@ -58,7 +58,7 @@ class _QuietWebSocketHandler(WebSocketHandler):
 class LoopbackBridge(ZMQWebSocketBridge):
     """meshcat's bridge with the web server bound to ``host`` and zmq bound to 127.0.0.1."""
 
-    def __init__(self, host: str, port: int) -> None:  # noqa: D107 - meshcat's __init__ binds everywhere
+    def __init__(self, host: str, port: int) -> None:  # meshcat's __init__ binds everywhere
         self.host = host
         self.websocket_pool = set()
         self.app = self.make_app()

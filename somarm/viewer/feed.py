@@ -18,7 +18,7 @@ import umsgpack
 import zmq
 from zmq.eventloop.zmqstream import ZMQStream
 
-__all__ = ["unpack_frame", "attach_feed"]
+__all__ = ["unpack_frame", "own_task", "attach_feed"]
 
 
 def unpack_frame(data: bytes) -> tuple[int, np.ndarray, np.ndarray, float]:
@@ -36,9 +36,19 @@ def unpack_frame(data: bytes) -> tuple[int, np.ndarray, np.ndarray, float]:
     return int(values[0]), values[3 : 3 + obs_dim].copy(), values[3 + obs_dim :].copy(), float(values[1])
 
 
+def own_task(task_name: str, task_params: dict | None):
+    """A one-trial task of the viewer's own, built from the run's task parameters.
+
+    The viewer never touches the training run's task object; it builds this one to know
+    where goals are (four_goals moves them at a given step).
+    """
+    from somarm import tasks
+
+    return tasks.make(task_name, n_trials=1, **tasks.parse_values(task_params or {}))
+
+
 def attach_feed(bridge, task_name: str, task_params: dict | None) -> str:
     """Draw ``task_name``'s scene in ``bridge`` and listen for frames; returns the feed's zmq address."""
-    from somarm.viewer.live import own_task
     from somarm.viewer.shows import show_for_task
 
     task = own_task(task_name, task_params)
@@ -58,8 +68,7 @@ def attach_feed(bridge, task_name: str, task_params: dict | None) -> str:
     def on_frame(frames: list[bytes]) -> None:
         try:
             step, observation, action, reward = unpack_frame(frames[-1])
-            if hasattr(task, "set_step"):
-                task.set_step(step)  # four_goals: the goals move at a given step
+            task.set_step(step)  # four_goals: the goals move at a given step
             apply(show.frame(observation, action, reward))
         except Exception as exc:  # a bad frame must not stop the server; say so once, in its log
             if not failures:

@@ -5,8 +5,8 @@
 pushes them to the viewer's server without waiting (``zmq.NOBLOCK``); the server process
 turns the newest frame into meshcat commands and drops frames it had no time for
 (``feed.py``). Nothing in the training process waits on the server or the browser, and no
-thread competes with training for the GIL (the thread we first used cost 30% of training
-speed; see the notes). If the server dies, ``update`` notices within a second, warns once,
+thread competes with training for the GIL (a background thread cost 30% of training speed
+when we measured it). If the server dies, ``update`` notices within a second, warns once,
 and from then on only reads the clock.
 """
 
@@ -20,7 +20,7 @@ import numpy as np
 from somarm.validation import check_int, check_number
 from somarm.viewer.client import ViewerUnavailableWarning
 
-__all__ = ["LiveView", "own_task", "pack_frame"]
+__all__ = ["LiveView", "pack_frame"]
 
 _HEALTH_CHECK_S = 1.0
 
@@ -32,23 +32,6 @@ def pack_frame(step: int, observation, action, reward) -> bytes:
     return np.concatenate([head, observation, action]).tobytes()
 
 
-def own_task(task_name: str, task_params: dict | None):
-    """A one-trial task of the viewer's own, or None when the task registry is not there.
-
-    The viewer never touches the training run's task object; it builds this one to know
-    where goals are (four_goals moves them at a given step).
-    """
-    try:
-        from somarm import tasks
-
-        make = tasks.make
-    except (ImportError, AttributeError):  # no task registry: the shows use the models' conventions
-        return None
-    from somarm.training import task_kwargs
-
-    return make(task_name, n_trials=1, **task_kwargs(task_params or {}))
-
-
 class LiveView:
     """Live meshcat view of one trial of a training run.
 
@@ -57,7 +40,7 @@ class LiveView:
       host: address the page listens on (127.0.0.1: this machine only).
       port: web port; None picks a free one.
       max_rate_hz: at most this many frames a second are pushed. 30 looks smooth; the cost
-        to training is measured by ``python -m somarm.viewer.bench`` (about 1% here).
+        to training is measured by ``somarm bench viewer`` (about 1% when we measured it).
       trial: which trial of the batch is shown.
       task_params: the run's task parameters, so goals and targets are drawn where training
         puts them.
@@ -89,11 +72,10 @@ class LiveView:
     ) -> None:
         import zmq
 
+        from somarm import tasks
         from somarm.viewer.server import MeshcatServer, stop_on_signals
-        from somarm.viewer.shows import MODEL_OF_TASK
 
-        if task_name not in MODEL_OF_TASK:
-            raise ValueError(f"unknown task {task_name!r}; allowed: {', '.join(MODEL_OF_TASK)}")
+        tasks.record(task_name)  # an unknown task fails here, before a server starts
         rate = check_number("max_rate_hz", max_rate_hz, minimum=0.0, strict_minimum=True)
         self.trial = check_int("trial", trial, minimum=0)
         self._period = 1.0 / rate

@@ -79,7 +79,7 @@ class MeshcatServer:
             return self
         self._folder = tempfile.TemporaryDirectory(prefix="somarm-meshcat-")
         ready_file = Path(self._folder.name) / "ready.json"
-        log = open(self.log_path, "wb")  # noqa: SIM115 - the child owns it from here
+        log = open(self.log_path, "wb")  # the child owns it from here
         command = [
             sys.executable, "-m", "somarm.viewer._bridge", "--host", self.host,
             "--port", str(self.requested_port), "--ready-file", str(ready_file),

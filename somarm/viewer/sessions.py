@@ -6,7 +6,6 @@ plays it on a live meshcat server until Ctrl-C or records it into a static HTML 
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,15 +13,10 @@ import numpy as np
 
 from somarm.streams import trial_generators
 from somarm.viewer import shows
-from somarm.viewer.adapters import goal_adapter
 from somarm.viewer.client import CommandSink
-from somarm.viewer.overlays import animation_command
+from somarm.viewer.shows import arm_animation
 
 __all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play"]
-
-#: Frames of joint-space interpolation between two goals in the HTML animation.
-_FRAMES_BETWEEN_GOALS = 12
-_FRAMES_HOLDING_GOAL = 18
 
 
 @dataclass
@@ -76,90 +70,40 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     Raises:
       ValueError: the run is for another task, or ``trial`` is not one of its trials.
     """
-    from somarm import tasks, training
+    from somarm import run as runs  # `run` is this function's folder argument
+    from somarm import tasks
 
     if run is not None:
-        config, learner = training.load_run(run)
+        config, learner = runs.load(run)
         if config.task != task_name:
             raise ValueError(f"--run {run} trained task {config.task!r}, not {task_name!r}")
-        task_params = training.task_kwargs(config.task_params)
+        task_params = tasks.parse_values(config.task_params)
     else:
-        config = training.RunConfig(task=task_name, seed=seed).resolved()
-        _, learner = training.build(config)
+        config = runs.RunConfig(task=task_name, seed=seed).resolved()
+        _, learner = runs.make(config)
         task_params = {}
     if not 0 <= trial < learner.n_trials:
         raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
-    if hasattr(task, "set_step"):
-        task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
+    task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
     observations = observations[_sweep_order(observations)]
     actions, errors = greedy_answers(task, learner, observations, trial=trial)
+    view = tasks.record(task_name).view
     fan = None
-    if task_name == "throw" and hasattr(learner, "action_weights"):
+    if view == "fan" and hasattr(learner, "action_weights"):
         fan = np.asarray(learner.action_weights)[trial]
-    if task_name == "reach20":
-        show = shows.SweepShow(shows.load_model("arm20"), len(observations),
-                               goal_of=goal_adapter(task_name, task))
-    else:
-        show = shows.show_for_task(task_name, task)
+    show = shows.show_for_task(task_name, task, sweep=len(observations) if view == "sweep" else None)
     return Session(task_name, observations, actions, errors, fan, show)
 
 
-def arm_animation(show: shows.ArmShow, observations: np.ndarray, actions: np.ndarray) -> dict:
-    """A looping animation through the goals: hold each pose, then move in joint space to the next."""
-    frames = []
-    n = len(observations)
-    for k in range(n):
-        frames += [show.frame(observations[k], actions[k])] * _FRAMES_HOLDING_GOAL
-        following = (k + 1) % n
-        for share in np.linspace(0.0, 1.0, _FRAMES_BETWEEN_GOALS + 2)[1:-1]:
-            action = (1 - share) * actions[k] + share * actions[following]
-            frames.append(show.frame(observations[following], action))
-    return animation_command(frames)
-
-
 def record(session: Session, sink: CommandSink) -> None:
-    """Everything of a session a static page needs: the scene and one looping animation (or the sweep)."""
-    show = session.show
-    if isinstance(show, shows.SweepShow):
-        sink.send_batch(show.setup())
-        sink.send_batch(show.frame(session.observations, session.actions))
-    elif isinstance(show, shows.ArmShow):
-        sink.send_batch(show.setup())
-        sink.send_batch(show.frame(session.observations[0], session.actions[0]))
-        sink.send(arm_animation(show, session.observations, session.actions))
-    else:
-        throws = session.fan if session.fan is not None else session.actions[:1]
-        show.show.n_balls = len(throws)
-        sink.send_batch(show.setup())
-        sink.send_batch(show.throws(session.observations[0], throws))
+    """Everything of a session a static page needs (the show decides: animation, sweep or fan)."""
+    session.show.record(session, sink)
 
 
 def play(session: Session, sink: CommandSink, *, interval_s: float = 1.5, once: bool = False,
          log=print) -> None:
     """Stream a session to a live server, goal after goal, until Ctrl-C (or one pass if ``once``)."""
-    show = session.show
-    if isinstance(show, shows.SweepShow) or (session.fan is not None):
-        record(session, sink)
-        log(f"{session.task_name}: {len(session.observations)} goals, mean error {session.errors.mean():.4f}")
-        while not once:
-            time.sleep(interval_s)
-        return
-    if isinstance(show, shows.ArmShow):
-        sink.send_batch(show.setup())
-    else:
-        show.show.n_balls = 1
-        sink.send_batch(show.setup())
-    while True:
-        for observation, action, error in zip(session.observations, session.actions, session.errors, strict=True):
-            if isinstance(show, shows.ArmShow):
-                sink.send_batch(show.frame(observation, action))
-            else:
-                sink.send_batch(show.throws(observation, action[None]))
-            log(f"goal {np.array2string(observation, precision=3)}  error {error:.4f}")
-            # A throw is watched to its landing before the next one starts.
-            time.sleep(interval_s if isinstance(show, shows.ArmShow) else max(interval_s, show.show.last_duration_s))
-        if once:
-            return
+    session.show.play(session, sink, interval_s=interval_s, once=once, log=log)

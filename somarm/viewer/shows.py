@@ -1,43 +1,31 @@
 """What the viewer streams per task: the arm at its greedy pose, a sweep of postures, the throws.
 
 A show turns one trial's (observation, action, reward) into meshcat commands. It never draws
-random numbers and never talks to a server, so the CLI, the training hook and the HTML export
-share it, and tests can check its poses against MuJoCo.
+random numbers and never talks to a server itself, so the CLI, the training hook and the HTML
+export share it, and tests can check its poses against MuJoCo. Each show also knows how a
+viewing session is recorded (``record``: a static page) and played (``play``: goal after goal).
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 
 import mujoco
 import numpy as np
 from meshcat.commands import SetTransform
 
+from somarm.tasks.assets import load_model
 from somarm.viewer import overlays
 from somarm.viewer.adapters import goal_adapter, throw_adapters
 from somarm.viewer.scene import MujocoScene, path_of
 
-__all__ = ["ArmShow", "SweepShow", "ThrowShow", "MODEL_OF_TASK", "load_model", "show_for_task"]
+__all__ = ["ArmShow", "SweepShow", "ThrowShow", "load_model", "show_for_task", "arm_animation"]
 
-#: Which MJCF model draws which task.
-MODEL_OF_TASK: dict[str, str] = {
-    "reach2": "arm2",
-    "four_goals": "arm2",
-    "reach20": "arm20",
-    "throw": "launcher",
-    "throw_distance": "launcher",
-    "throw_wind": "launcher",
-    "throw_friction": "launcher",
-    "throw_mass": "launcher",
-}
 _TIP_COLOR, _ERROR_COLOR, _INPUT_COLOR = 0xFFD21F, 0xE0301E, 0x3050C0
-
-
-def load_model(name: str) -> mujoco.MjModel:
-    """The compiled MJCF model ``name`` (``arm2``, ``arm20``, ``launcher``) from the tasks' assets."""
-    from somarm.tasks import assets  # the tasks own where models live
-
-    return mujoco.MjModel.from_xml_path(str(assets.model_path(name)))
+#: Frames of joint-space interpolation between two goals in the HTML animation.
+_FRAMES_BETWEEN_GOALS = 12
+_FRAMES_HOLDING_GOAL = 18
 
 
 def _plane_view(model: mujoco.MjModel) -> np.ndarray:
@@ -118,6 +106,18 @@ class ArmShow:
             commands.append(SetTransform(overlays.translation(where), self.prefix.append("input")).lower())
         return commands
 
+    def record(self, session, sink) -> None:
+        """A session for a static page: the scene and one looping animation through its goals."""
+        sink.send_batch(self.setup())
+        sink.send_batch(self.frame(session.observations[0], session.actions[0]))
+        sink.send(arm_animation(self, session.observations, session.actions))
+
+    def play(self, session, sink, *, interval_s: float, once: bool, log) -> None:
+        """Stream a session goal after goal, ``interval_s`` apart, until Ctrl-C (one pass if ``once``)."""
+        sink.send_batch(self.setup())
+        _stream(session, sink, lambda observation, action: self.frame(observation, action),
+                lambda: interval_s, once=once, log=log)
+
 
 class SweepShow:
     """Fig. 11: the arm's greedy postures for a sweep of goals, all at once, shaded along the sweep.
@@ -157,6 +157,15 @@ class SweepShow:
         for arm, observation, action in zip(self.arms, observations, actions, strict=True):
             commands += arm.frame(observation, action)
         return commands
+
+    def record(self, session, sink) -> None:
+        """Every posture of the session's sweep at once."""
+        sink.send_batch(self.setup())
+        sink.send_batch(self.frame(session.observations, session.actions))
+
+    def play(self, session, sink, *, interval_s: float, once: bool, log) -> None:
+        """The sweep, drawn once and kept on screen until Ctrl-C (or at once if ``once``)."""
+        _hold(self, session, sink, interval_s=interval_s, once=once, log=log)
 
 
 class ThrowShow:
@@ -267,21 +276,75 @@ class _ThrowStream:
         return self.show.throw_commands(actions, self.target_of(observation),
                                         trajectory=self.trajectory_of(observation))
 
+    def record(self, session, sink) -> None:
+        """The fan of every action unit (the single-state throw), or the first goal's throw, animated."""
+        throws = session.fan if session.fan is not None else session.actions[:1]
+        self.show.n_balls = len(throws)
+        sink.send_batch(self.setup())
+        sink.send_batch(self.throws(session.observations[0], throws))
 
-def show_for_task(task_name: str, task=None):
+    def play(self, session, sink, *, interval_s: float, once: bool, log) -> None:
+        """A fan is held on screen; otherwise one throw per goal, each watched to its landing."""
+        if session.fan is not None:
+            _hold(self, session, sink, interval_s=interval_s, once=once, log=log)
+            return
+        self.show.n_balls = 1
+        sink.send_batch(self.setup())
+        _stream(session, sink, lambda observation, action: self.throws(observation, action[None]),
+                lambda: max(interval_s, self.show.last_duration_s), once=once, log=log)
+
+
+def _hold(show, session, sink, *, interval_s: float, once: bool, log) -> None:
+    """Record the session, then keep it on screen until Ctrl-C (or return at once if ``once``)."""
+    show.record(session, sink)
+    log(f"{session.task_name}: {len(session.observations)} goals, mean error {session.errors.mean():.4f}")
+    while not once:
+        time.sleep(interval_s)
+
+
+def _stream(session, sink, commands_of, pause_s: Callable[[], float], *, once: bool, log) -> None:
+    """Send ``commands_of(observation, action)`` goal after goal, ``pause_s()`` apart."""
+    while True:
+        for observation, action, error in zip(session.observations, session.actions, session.errors, strict=True):
+            sink.send_batch(commands_of(observation, action))
+            log(f"goal {np.array2string(observation, precision=3)}  error {error:.4f}")
+            time.sleep(pause_s())
+        if once:
+            return
+
+
+def arm_animation(show: ArmShow, observations: np.ndarray, actions: np.ndarray) -> dict:
+    """A looping animation through the goals: hold each pose, then move in joint space to the next."""
+    frames = []
+    n = len(observations)
+    for k in range(n):
+        frames += [show.frame(observations[k], actions[k])] * _FRAMES_HOLDING_GOAL
+        following = (k + 1) % n
+        for share in np.linspace(0.0, 1.0, _FRAMES_BETWEEN_GOALS + 2)[1:-1]:
+            action = (1 - share) * actions[k] + share * actions[following]
+            frames.append(show.frame(observations[following], action))
+    return overlays.animation_command(frames)
+
+
+def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
     """What ``somarm view`` and ``LiveView`` stream for a task: ``setup()`` then ``frame(obs, action, reward)``.
 
     Args:
-      task_name: registered task name.
-      task: the task object, when there is one; it tells where goals and targets are.
+      task_name: registered task name; its record names the model that draws it.
+      task: the task object (it tells where goals and targets are); None builds a one-trial one.
+      sweep: draw this many postures at once (Fig. 11's sweep, an arm task) instead of one arm.
 
     Raises:
-      ValueError: unknown task name.
+      ValueError: unknown task name (the names are listed).
     """
-    if task_name not in MODEL_OF_TASK:
-        raise ValueError(f"unknown task {task_name!r}; allowed: {', '.join(MODEL_OF_TASK)}")
-    model = load_model(MODEL_OF_TASK[task_name])
-    if MODEL_OF_TASK[task_name] != "launcher":
-        return ArmShow(model, goal_of=goal_adapter(task_name, task), prefix=f"/meshcat/{task_name}")
-    trajectory_of, target_of = throw_adapters(task_name, task)
-    return _ThrowStream(ThrowShow(model, prefix=f"/meshcat/{task_name}"), trajectory_of, target_of)
+    from somarm import tasks
+
+    model_name = tasks.record(task_name).model
+    task = tasks.make(task_name) if task is None else task
+    model = load_model(model_name)
+    if model_name == "launcher":
+        trajectory_of, target_of = throw_adapters(task)
+        return _ThrowStream(ThrowShow(model, prefix=f"/meshcat/{task_name}"), trajectory_of, target_of)
+    if sweep is not None:
+        return SweepShow(model, sweep, goal_of=goal_adapter(task))
+    return ArmShow(model, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")

@@ -1,0 +1,329 @@
+"""A training run, owned in one place: its configuration, building, training, summary and folder.
+
+``RunConfig`` (``somarm.run_config``, re-exported here) is the single source of a run's
+settings: the ``somarm train`` options, their defaults and help are derived from its fields (as
+CleanRL derives its command line from a dataclass), and it is saved as ``config.json``. ``train``/``train_group`` build the task and the
+learners once and hand them to the loop in ``somarm.training``; ``write`` and ``load`` own the
+run folder::
+
+    result = run.train(RunConfig(task="reach2", n_trials=20))
+    run.write(result, "runs/reach2", extra_summary=run.greedy_summary(result))
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from somarm import __version__
+from somarm.io import atomic_save_npz, atomic_write_json
+from somarm.protocols import BatchedTask, Learner
+from somarm.run_config import RunConfig, add_options, from_options, parse_assignments
+from somarm.training import StepHook, final_blocks, final_rewards, loop
+
+__all__ = [
+    "RunConfig",
+    "RunResult",
+    "add_options",
+    "from_options",
+    "parse_assignments",
+    "make_task",
+    "make_learner",
+    "make",
+    "train",
+    "train_group",
+    "RunGroup",
+    "greedy_summary",
+    "summary",
+    "write",
+    "load",
+    "task_for",
+    "final_rewards",
+]
+
+
+# -- building -----------------------------------------------------------------------------------
+def make_task(config: RunConfig, trial_ids: np.ndarray | None = None) -> BatchedTask:
+    """The batched task of a (resolved) run config, for its trials or the given ``trial_ids``."""
+    from somarm import tasks
+
+    ids = config.trial_ids_array() if trial_ids is None else trial_ids
+    return tasks.make(config.task, n_trials=len(ids), seed=config.seed, trial_ids=ids, backend=config.backend,
+                      **tasks.parse_values(config.task_params))
+
+
+def make_learner(config: RunConfig, task: BatchedTask) -> Learner:
+    """The learner of a (resolved) run config, reading the task's observation and action bounds."""
+    from somarm import learners, presets
+
+    learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
+    return learners.make(
+        config.learner,
+        learner_config,
+        observation_low=task.observation_low,
+        observation_high=task.observation_high,
+        action_low=task.action_low,
+        action_high=task.action_high,
+        n_trials=config.n_trials,
+        seed=config.seed,
+        trial_ids=config.trial_ids_array(),
+    )
+
+
+def make(config: RunConfig) -> tuple[BatchedTask, Learner]:
+    """Make the task and the learner of a (resolved) run config."""
+    task = make_task(config)
+    return task, make_learner(config, task)
+
+
+# -- training -----------------------------------------------------------------------------------
+@dataclass
+class RunResult:
+    """What ``train`` returns: the trained learner and its learning curves."""
+
+    config: RunConfig
+    learner: Learner
+    task: BatchedTask
+    block_means: np.ndarray  #: (n_blocks, n_trials) mean reward of each complete block
+    block_sq_means: np.ndarray  #: (n_blocks, n_trials) mean squared reward of each block (data spread)
+    steps_done: int
+    wall_time: float
+    interrupted: bool = False
+    snapshots: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
+    """Copies of the maps (and Q) of every trial taken after the steps asked for in ``train``."""
+
+    @property
+    def steps(self) -> np.ndarray:
+        """Step at the end of each recorded block, shape ``(n_blocks,)``."""
+        return (np.arange(len(self.block_means)) + 1) * self.config.block
+
+
+def train(config: RunConfig, *, progress: bool = True, on_step: StepHook | None = None,
+          label: str | None = None, snapshots_at: tuple[int, ...] = ()) -> RunResult:
+    """Train ``config.n_trials`` trials for ``config.n_steps`` steps.
+
+    Ctrl-C or SIGTERM stops at the end of the current step and returns what was learned so far
+    (``interrupted=True``): the caller can still write a valid partial run.
+
+    Args:
+      config: the run (defaults are filled in here).
+      progress: draw a progress bar with the running mean reward on stderr.
+      on_step: called as ``on_step(step, observations, actions, rewards)`` after every step
+        (the live viewer); it must be cheap.
+      label: progress-bar label (default ``task/learner``).
+      snapshots_at: steps after which to copy the maps (``RunResult.snapshots``).
+
+    Returns:
+      A ``RunResult``.
+
+    Raises:
+      ValueError: a bad setting (before anything is trained).
+    """
+    return train_group([config], progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)[0]
+
+
+def train_group(configs: list[RunConfig], *, progress: bool = True, on_step: StepHook | None = None,
+                label: str | None = None, snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
+    """Train several learners in lockstep, with one physics call per step for all (``RunGroup``).
+
+    The configs share backend, steps and block; those of one task, task parameters and seed share
+    one batched task. Each config's trials see the same observations and random numbers as when
+    trained alone, so results equal ``train``'s. Comparisons (Figs. 13, 21-24), Fig. 25's four
+    experiments and ``reproduce --seeds`` run this way: the physics dominates their cost.
+
+    Returns:
+      One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays (one task).
+    """
+    return RunGroup(configs).train(progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)
+
+
+class RunGroup:
+    """Configs trained in lockstep, resolved and built once: a task per task, task parameters and
+    seed (shared by the configs that share those), one learner each.
+
+    Configs of one task differ only in their learner settings (learner, preset, overrides, trials)
+    and share one batched task; configs of different tasks or seeds (Fig. 25's experiments A-D,
+    ``reproduce --seeds``) get a task each, stepped together with one physics call where the tasks
+    allow it (``tasks.base.step_together``: several throw tasks fly in one batch). Building is
+    where a bad preset, ``--set`` or ``--task-set`` fails, so a caller can build first (fail fast),
+    then prepare its output, then ``train`` what it built.
+
+    Raises:
+      ValueError: a bad setting, or configs that do not share backend, steps and block.
+    """
+
+    def __init__(self, configs: list[RunConfig]) -> None:
+        self.configs = [c.resolved() for c in configs]
+        if len({(c.backend, c.n_steps, c.block) for c in self.configs}) != 1:
+            raise ValueError("a group shares backend, steps and block; these differ")
+        keys = [(c.task, json.dumps(c.task_params, sort_keys=True), c.seed) for c in self.configs]
+        distinct = list(dict.fromkeys(keys))
+        self.tasks = []
+        for key in distinct:
+            members = [c for c, k in zip(self.configs, keys, strict=True) if k == key]
+            self.tasks.append(make_task(members[0], np.concatenate([c.trial_ids_array() for c in members])))
+        self.task = self.tasks[0]
+        # Each config owns a slice of its task's trials and a slice of the curves' columns.
+        self.owners, self.parts, self.columns = [], [], []
+        offsets = np.cumsum([0] + [t.n_trials for t in self.tasks])
+        filled = [0] * len(self.tasks)
+        for key, config in zip(keys, self.configs, strict=True):
+            i = distinct.index(key)
+            self.owners.append(i)
+            self.parts.append(slice(filled[i], filled[i] + config.n_trials))
+            self.columns.append(slice(int(offsets[i]) + filled[i], int(offsets[i]) + filled[i] + config.n_trials))
+            filled[i] += config.n_trials
+        self.learners = [make_learner(c, self.tasks[i]) for c, i in zip(self.configs, self.owners, strict=True)]
+
+    def train(self, *, progress: bool = True, on_step: StepHook | None = None, label: str | None = None,
+              snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
+        """Train the built learners once (see ``train_group``); one ``RunResult`` per config.
+
+        Raises:
+          ValueError: ``on_step`` for a group of several tasks or seeds.
+        """
+        first = self.configs[0]
+        curves = loop(self.tasks, self.learners, self.parts, owners=self.owners, n_steps=first.n_steps,
+                      block=first.block, progress=progress, on_step=on_step,
+                      label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at)
+        results = []
+        for config, learner, column, taken in zip(self.configs, self.learners, self.columns, curves.snapshots,
+                                                  strict=True):
+            own_task = self.task if len(self.configs) == 1 else make_task(config)
+            own_task.set_step(curves.steps_done)  # its phase (four_goals) is the one the learner reached
+            results.append(RunResult(
+                config=config,
+                learner=learner,
+                task=own_task,
+                block_means=curves.block_means[:, column].copy(),
+                block_sq_means=curves.block_sq_means[:, column].copy(),
+                steps_done=curves.steps_done,
+                wall_time=curves.wall_time,
+                interrupted=curves.interrupted,
+                snapshots=taken,
+            ))
+        return results
+
+
+# -- summary and folder -------------------------------------------------------------------------
+def greedy_summary(result: RunResult, n_observations: int = 1000) -> dict[str, Any]:
+    """The summary keys of a greedy evaluation on fresh observations (seeded by the run's seed).
+
+    A failed evaluation gives ``{"greedy_error": message}`` instead, so the run is still written.
+    """
+    from somarm import evaluation
+
+    if result.steps_done == 0:
+        return {}
+    try:
+        greedy = evaluation.evaluate_greedy(result.learner, result.task, n_observations=n_observations,
+                                            seed=result.config.seed)
+    except ValueError as exc:
+        return {"greedy_error": str(exc)}
+    return {
+        "greedy_mean_reward": float(greedy.mean()),
+        "greedy_sd_reward": float(greedy.std()),
+        "greedy_observations": n_observations,
+    }
+
+
+def _number_or_none(x: float) -> float | None:
+    """JSON has no NaN: a mean over nothing is written as null."""
+    return float(x) if np.isfinite(x) else None
+
+
+def summary(result: RunResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The ``summary.json`` of a run: settings, steps, time, final rewards, then ``extra``."""
+    config = result.config
+    window = min(1000, max(config.block, config.n_steps // 10))
+    final = final_rewards(result.block_means, config.block, window)
+    window = final_blocks(len(result.block_means), config.block, window) * config.block
+    return {
+        "task": config.task,
+        "learner": config.learner,
+        "preset": config.preset,
+        "seed": config.seed,
+        "n_trials": config.n_trials,
+        "steps": result.steps_done,
+        "steps_requested": config.n_steps,
+        "interrupted": result.interrupted,
+        "wall_time_s": round(result.wall_time, 3),
+        "final_window_steps": window,
+        "final_mean_reward": _number_or_none(np.mean(final)),
+        "final_sd_reward": _number_or_none(np.std(final)),
+        "somarm_version": __version__,
+        **(extra or {}),
+    }
+
+
+def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
+          extra_summary: dict[str, Any] | None = None) -> Path:
+    """Write a run folder: config.json, curves.npz, learner.npz, summary.json and PNG figures.
+
+    Every file is written atomically, so an interrupted write leaves the previous file or none.
+
+    Raises:
+      ValueError: the folder cannot be created.
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"cannot create output folder {out}: {exc.strerror or exc}") from None
+    config = result.config
+    data = summary(result, extra_summary)
+    atomic_write_json(out / "config.json", {**config.to_dict(), "somarm_version": __version__})
+    atomic_save_npz(
+        out / "curves.npz",
+        block_means=result.block_means,
+        block_sq_means=result.block_sq_means,
+        block=config.block,
+        steps=result.steps,
+        seed=config.seed,
+    )
+    result.learner.save(out / "learner.npz")
+    if figures and result.steps_done > 0:
+        from somarm import plots
+
+        plots.run_figures(result, out)
+    atomic_write_json(out / "summary.json", data)
+    return out
+
+
+def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
+    """Read a run folder's config and final learner state.
+
+    Raises:
+      ValueError: not a run folder, or a damaged ``config.json`` or ``learner.npz``.
+    """
+    from somarm import learners
+
+    out = Path(out_dir)
+    for name in ("config.json", "learner.npz"):
+        if not (out / name).is_file():
+            raise ValueError(f"{out} is not a run folder: {name} is missing")
+    try:
+        data = json.loads((out / "config.json").read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{out / 'config.json'} is not readable JSON: {exc}") from None
+    if isinstance(data, dict):
+        data.pop("somarm_version", None)
+    try:
+        config = RunConfig.from_dict(data)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{out / 'config.json'}: {exc}") from None
+    return config, learners.load(out / "learner.npz")
+
+
+def task_for(config: RunConfig, learner: Learner) -> BatchedTask:
+    """The task of a loaded run for all the learner's trials, in the learner's phase (four_goals)."""
+    from somarm import tasks
+
+    task = tasks.make(config.task, n_trials=learner.n_trials, seed=config.seed, backend=config.backend,
+                      **tasks.parse_values(config.task_params))
+    task.set_step(learner.t)
+    return task

@@ -1,0 +1,52 @@
+"""How a run stops: Ctrl-C (SIGINT) and SIGTERM, handled here and nowhere else.
+
+Training reads a flag between steps (``stop_between_steps``), so a run never stops between a
+learner's ``act`` and ``learn``; outside the training loop (``somarm reproduce``, the writing of a
+run folder) SIGTERM is made to behave like Ctrl-C (``sigterm_as_interrupt``), so a stopped
+command still keeps what it finished.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+
+__all__ = ["stop_between_steps", "sigterm_as_interrupt"]
+
+
+@contextlib.contextmanager
+def stop_between_steps() -> Iterator[dict[str, bool]]:
+    """Inside, Ctrl-C and SIGTERM only set ``flag["requested"]``, which the loop reads after each step.
+
+    Signals that were being ignored stay ignored; outside the main thread nothing changes (Python
+    delivers signals to the main thread only).
+    """
+    stop = {"requested": False}
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def request(signum, frame):
+        stop["requested"] = True
+
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, handler in previous.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(sig, request)
+    try:
+        yield stop
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def sigterm_as_interrupt() -> None:
+    """From now on SIGTERM raises ``KeyboardInterrupt`` like Ctrl-C (main thread only)."""
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, handler)

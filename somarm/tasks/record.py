@@ -1,0 +1,80 @@
+"""A task record: every fact about one registered task, kept next to the task's code.
+
+Each task module lists its tasks in a module-level ``RECORDS`` tuple (as dm_control's suite
+modules register their tasks); ``somarm.tasks`` collects them, and the runner, the plots and
+the viewer read them instead of keeping tables of their own.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["TaskRecord", "parse_values"]
+
+
+def parse_values(given: dict[str, Any]) -> dict[str, Any]:
+    """Parameter values as the CLI gives them (``"4.5"``, ``"true"``, ``"[[0.1, 0.2]]"``) made values.
+
+    A string that parses as JSON (a number, a boolean, a list) becomes that value; any other
+    string stays as it is (the params class then names what it expected). Non-strings pass.
+    """
+    out = {}
+    for key, value in given.items():
+        try:
+            out[key] = json.loads(value) if isinstance(value, str) else value
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
+
+
+@dataclass(frozen=True)
+class TaskRecord:
+    """One registered task."""
+
+    name: str
+    """The name ``somarm.tasks.make`` and the CLI take."""
+    summary: str
+    """One line: what is observed, what is acted, which figure or table of the paper."""
+    params: type
+    """The frozen dataclass of the task's parameters."""
+    settable: tuple[str, ...]
+    """The parameters a user may set (a task that draws a parameter per episode does not offer it)."""
+    make: Callable[..., Any]
+    """``make(params, n_trials=, seed=, trial_ids=, backend=)``: the batched task (``BatchedTask``)."""
+    environment: Callable[[Any], tuple[Any, Any]]
+    """``environment(batched) -> (physics, dm_control task)`` for the dm_env interface."""
+    preset: str
+    """The paper's parameter table this task trains with by default (``somarm.presets``)."""
+    n_steps: int
+    """Default training steps (the paper gives run lengths only for Fig. 17: these are this
+    project's choice elsewhere)."""
+    model: str
+    """The MJCF model (``models/<model>.xml``) that draws the task in the viewer."""
+    observation_labels: tuple[str, ...]
+    """Names of the observation dimensions, used as the run figures' axis labels."""
+    action_labels: tuple[str, ...]
+    """Axis labels of the first two (normalised) action dimensions in the run figures."""
+    view: str = "goals"
+    """How ``somarm view`` shows a trained learner: ``goals`` (one pose per goal, in turn),
+    ``sweep`` (every goal's posture at once, as Fig. 11) or ``fan`` (every action unit thrown at
+    once, as Fig. 16)."""
+
+    def params_from(self, given: dict[str, Any]) -> Any:
+        """The params of this task with ``given`` fields changed from their defaults.
+
+        Raises:
+          ValueError: a name that is not settable (the settable ones are listed) or a bad value.
+        """
+        unknown = sorted(set(given) - set(self.settable))
+        if unknown:
+            raise ValueError(f"unknown parameter(s) {', '.join(unknown)} for task {self.name}; "
+                             f"its parameters: {', '.join(self.settable)}")
+        return self.params(**given)
+
+    def fields(self) -> tuple[str, ...]:
+        """Every field of the params class (settable or not)."""
+        return tuple(field.name for field in dataclasses.fields(self.params))
