@@ -76,8 +76,10 @@ def load_physics(G: float = 0.05) -> LauncherPhysics:
     """The launcher physics with gravity ``G`` (Table 3's by default) and the model's drag and mass."""
     physics = LauncherPhysics.from_xml_path(str(model_path("launcher")))
     physics.model.opt.gravity[:] = (0.0, 0.0, -G)
-    physics.set_conditions(Fr=float(physics.named.model.dof_damping["x"]), W=0.0,
-                           M=float(physics.named.model.body_mass["projectile"]))
+    (x,), _ = physics._dofs()
+    model = physics.model
+    physics.set_conditions(Fr=float(model.dof_damping[x]), W=0.0,
+                           M=float(model.body_mass[model.name2id("projectile", "body")]))
     return physics
 
 
