@@ -25,6 +25,11 @@ def test_quick_benchmark_prints_a_row_per_task(capsys, tmp_path):
         assert f["step100_x_batch"] == pytest.approx(f["step100_ms"] / 1e3 / 100 * f["mujoco_per_s"])
 
 
+def test_json_into_a_missing_folder_fails_before_measuring(tmp_path):
+    with pytest.raises(ValueError, match="the folder .* does not exist"):
+        bench.main(["--quick", "--only", "throw", "--json", str(tmp_path / "nope" / "bench.json")])
+
+
 def test_unknown_task_fails_in_one_line():
     with pytest.raises(ValueError, match="unknown task 'reach3'; tasks: reach2"):
         bench.main(["--quick", "--only", "reach3"])

@@ -113,6 +113,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=2, help="threads of the MuJoCo backend (2)")
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write every figure to FILE (JSON)")
     args = parser.parse_args(argv)
+    if args.json is not None and not args.json.parent.is_dir():
+        raise ValueError(f"--json {args.json}: the folder {args.json.parent} does not exist")
     tasks.set_threads(args.threads)
     names = args.only or tasks.names()
     for name in names:
@@ -149,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{flight.DEFAULT_TOLERANCE:g}, all steps in one model by time scaling; {flight.THREADS} thread(s); "
           "batches sorted by flight length.")
     if args.json is not None:
-        atomic_write_json(args.json, {
+        _write_json(args.json, {
             "threads": args.threads, "quick": args.quick, "repeats": repeats,
             "tasks": {name: {"mujoco_per_s": f["mujoco"], "analytic_per_s": f["analytic"],
                              "difference": f["difference"], "dm_env_us": f["dm_env_us"],
@@ -159,3 +161,10 @@ def main(argv: list[str] | None = None) -> int:
         })
         print(f"figures written to {args.json}")
     return 0
+
+
+def _write_json(path: Path, figures: dict) -> None:
+    try:
+        atomic_write_json(path, figures)
+    except OSError as exc:
+        raise ValueError(f"cannot write --json {path}: {exc.strerror or exc}") from None
