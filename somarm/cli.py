@@ -1,4 +1,4 @@
-"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view."""
+"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view, sweep."""
 
 from __future__ import annotations
 
@@ -119,12 +119,19 @@ def _cmd_reproduce(args) -> int:
                             seeds=args.seeds, backend=args.backend)
 
 
+def _cmd_sweep(args) -> int:
+    from somarm.sweep import cli as sweep_cli
+
+    return sweep_cli.main(args)
+
+
 def _cmd_forward(module: str, argv: list[str]) -> int:
     return int(importlib.import_module(module).main(argv) or 0)
 
 
 def _parser() -> argparse.ArgumentParser:
     from somarm import run
+    from somarm.sweep import cli as sweep_cli
 
     parser = _Parser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -161,6 +168,11 @@ def _parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer (pass --help after the name)")
     bench.add_argument("name", choices=_BENCHMARKS)
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
+
+    sweep = sub.add_parser("sweep", help="search learner settings and task parameters over seeds")
+    run.add_options(sweep)  # the run every point starts from; --seed is the first seed
+    sweep_cli.add_options(sweep)
+    sweep.set_defaults(func=_cmd_sweep)
     return parser
 
 

@@ -8,7 +8,7 @@ from somarm.protocols import BatchedTask, Learner
 from somarm.streams import PURPOSES
 from somarm.validation import check_int
 
-__all__ = ["evaluation_rng", "evaluate_greedy"]
+__all__ = ["evaluation_rng", "evaluate_greedy", "greedy_episodes"]
 
 
 def evaluation_rng(seed: int) -> np.random.Generator:
@@ -38,3 +38,40 @@ def evaluate_greedy(
     batch = np.broadcast_to(observations, (learner.n_trials, *observations.shape))
     actions = learner.predict(np.ascontiguousarray(batch))
     return task.evaluate(batch, actions).mean(axis=-1)
+
+
+def greedy_episodes(learner: Learner, task, *, n_episodes: int = 100, seed: int = 0) -> dict[str, np.ndarray]:
+    """Each trial's greedy policy run for whole episodes of a multi-step task (``task.episodic``).
+
+    Every trial starts the same ``n_episodes`` start poses (the evaluation stream of ``seed``);
+    all ``n_trials x n_episodes`` episodes run in one batch.
+
+    Args:
+      learner: a trained learner with ``n_trials`` trials.
+      task: a multi-step task with ``run_episodes`` and ``sample_observations``.
+      n_episodes: episodes per trial (>= 1).
+      seed: seed of the evaluation stream.
+
+    Returns:
+      ``{"success_rate": (n_trials,), "mean_length": (n_trials,)}``: the fraction of episodes that
+      reach the goal, and the mean steps of those that do (NaN for a trial that never does).
+
+    Raises:
+      ValueError: a task without whole episodes, or a bad ``n_episodes``.
+    """
+    if not getattr(task, "episodic", False):
+        raise ValueError(f"task {task.name} has one-step episodes; greedy episodes need a multi-step task")
+    n_episodes = check_int("n_episodes", n_episodes)
+    starts = task.sample_observations(evaluation_rng(seed), n_episodes)
+    n_trials = learner.n_trials
+
+    def policy(angles: np.ndarray) -> np.ndarray:
+        return learner.predict(angles.reshape(n_trials, n_episodes, -1)).reshape(len(angles), -1)
+
+    episodes = task.run_episodes(policy, np.tile(starts, (n_trials, 1)))
+    success = episodes["success"].reshape(n_trials, n_episodes)
+    lengths = np.where(success, episodes["length"].reshape(n_trials, n_episodes), 0)
+    reached = success.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_length = np.where(reached > 0, lengths.sum(axis=1) / np.maximum(reached, 1), np.nan)
+    return {"success_rate": success.mean(axis=1), "mean_length": mean_length}

@@ -224,11 +224,21 @@ def greedy_summary(result: RunResult, n_observations: int = 1000) -> dict[str, A
                                             seed=result.config.seed)
     except ValueError as exc:
         return {"greedy_error": str(exc)}
-    return {
+    out = {
         "greedy_mean_reward": float(greedy.mean()),
         "greedy_sd_reward": float(greedy.std()),
         "greedy_observations": n_observations,
     }
+    if getattr(result.task, "episodic", False):  # whole greedy episodes from the task's start poses
+        episodes = evaluation.greedy_episodes(result.learner, result.task, n_episodes=100,
+                                              seed=result.config.seed)
+        lengths = episodes["mean_length"][np.isfinite(episodes["mean_length"])]
+        out.update({
+            "greedy_success_rate": float(episodes["success_rate"].mean()),
+            "greedy_mean_episode_length": float(lengths.mean()) if lengths.size else None,
+            "greedy_episodes": 100,
+        })
+    return out
 
 
 def _number_or_none(x: float) -> float | None:

@@ -2,6 +2,8 @@
 
 Data flows one way each step: ``task.reset() -> observations -> learner.act -> actions ->
 task.step (physics) -> rewards -> learner.learn``. The loop holds both ends and passes arrays.
+A multi-step task (``task.episodic``) also hands the learner each trial's next observation and
+whether its episode ended at the goal; its ``reset()`` restarts only the finished episodes.
 Building the task and learners, and writing the results, belong to ``somarm.run``.
 """
 
@@ -94,6 +96,7 @@ def loop(
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in learners]
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
+    episodic = [bool(getattr(t, "episodic", False)) for t in tasks]  # multi-step episodes (reach2_obstacle)
     start = time.perf_counter()
     step = 0
     interrupted = False
@@ -105,7 +108,10 @@ def loop(
                     actions[i][part] = learner.act(observations[i][part])
                 rewards_of = step_together(tasks, actions)
                 for learner, i, part in zip(learners, owners, parts, strict=True):
-                    learner.learn(rewards_of[i][part])
+                    if episodic[i]:  # the next state and whether the episode ended there
+                        learner.learn(rewards_of[i][part], tasks[i].next_observations[part], tasks[i].terminal[part])
+                    else:
+                        learner.learn(rewards_of[i][part])
                 rewards = rewards_of[0] if len(tasks) == 1 else np.concatenate(rewards_of)
                 accumulated += rewards
                 accumulated_sq += rewards * rewards

@@ -85,7 +85,7 @@ def test_make_arm20_script_check_mode():
 
 
 def test_model_path_unknown_name_lists_the_models():
-    with pytest.raises(ValueError, match="arm2, arm20, launcher"):
+    with pytest.raises(ValueError, match="arm2, arm20, arm2_obstacle, launcher"):
         assets.model_path("arm3")
 
 

@@ -12,12 +12,20 @@ NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
-    assert list(presets.PRESETS) == NAMES
+    assert list(presets.PRESETS) == [*NAMES, "obstacle"]
     for name in NAMES:
         assert isinstance(presets.get(name), SOMQConfig)
         line = presets.describe(name)
         assert line.startswith("Table") and "\n" not in line and "Fig" in line
         assert presets.PRESETS[name].config is presets.get(name)
+
+
+def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
+    preset = presets.PRESETS["obstacle"]
+    assert preset.task == "reach2_obstacle" and preset.config.gamma == 0.9
+    assert preset.config.input_shape == (12, 12) and preset.config.action_shape == (3, 3)
+    assert presets.describe("obstacle").startswith("beyond the paper")
+    assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
 
 
 def test_table1_values():

@@ -8,7 +8,8 @@ import pytest
 from somarm import tasks
 from somarm.protocols import BatchedTask
 
-NAMES = tasks.names()
+#: The one-step tasks (the paper's); reach2_obstacle's whole episodes are tested in test_obstacle.py.
+NAMES = [name for name in tasks.names() if name != "reach2_obstacle"]
 
 
 def _actions(task, rng, n):
@@ -16,9 +17,10 @@ def _actions(task, rng, n):
 
 
 def test_registry_lists_the_tasks_of_the_paper():
+    assert tasks.names() == [*NAMES, "reach2_obstacle"]
     assert NAMES == ["reach2", "reach20", "four_goals", "throw", "throw_distance", "throw_wind",
                      "throw_friction", "throw_mass"]
-    for name in NAMES:
+    for name in tasks.names():
         line = tasks.describe(name)
         assert line and "\n" not in line
 

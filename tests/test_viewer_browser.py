@@ -261,3 +261,30 @@ def test_the_static_html_opens_without_a_server_and_animates(browser, tmp_path):
     assert screenshot(page, tmp_path, "offline.png").std() > 10
     assert page.foreign_requests == []
     page.close()
+
+
+@pytest.mark.parametrize("task_name, task_set", [("reach2_obstacle", {}), ("reach2", {"dynamics": "actuated"})])
+def test_driven_arms_move_along_mujocos_trajectory_in_the_exported_page(browser, tmp_path, task_name, task_set):
+    from somarm.viewer import sessions
+
+    session = sessions.load_session(task_name, n_goals=2, seed=0, task_set=task_set)
+    recorder = Recorder()
+    sessions.record(session, recorder)
+    path = write_html(tmp_path / f"{task_name}.html", recorder.commands())
+    page = open_page(browser, path.as_uri())
+    page.wait_for_function("() => typeof viewer !== 'undefined' && viewer.scene.getObjectByName('link2')")
+    settle(page)
+    assert page.evaluate("() => viewer.animator.playing")
+    root = ["meshcat", task_name]
+    model = session.show.model
+    mocap = np.array([[*session.observations[0][:2], 0.0]] * model.nmocap).reshape(model.nmocap, 3)
+    # At 50 frames a second, frame k (time k / 50 s) is timestep 2k of the first path.
+    page.evaluate("() => viewer.animator.pause()")
+    for k in (0, 10):
+        page.evaluate(f"() => viewer.animator.seek({k / 50.0})")
+        settle(page)
+        drawn = page.evaluate(RELATIVE_POSE, [root, ["link2"]])
+        expected = mujoco_pose(model, session.paths[0][2 * k], mocap, "link2")
+        np.testing.assert_allclose(np.array(drawn["link2"]).reshape(4, 4).T, expected, atol=1e-5)
+    assert screenshot(page, tmp_path, f"viewer-{task_name}.png").std() > 10
+    page.close()

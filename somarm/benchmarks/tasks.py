@@ -109,14 +109,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small batches, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure, best kept (3)")
-    parser.add_argument("--only", nargs="+", metavar="TASK", help="benchmark only these tasks")
+    parser.add_argument("--only", nargs="+", metavar="TASK",
+                        help="benchmark only these tasks ('driven': the actuated and obstacle rows)")
     parser.add_argument("--threads", type=int, default=2, help="threads of the MuJoCo backend (2)")
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write every figure to FILE (JSON)")
     args = parser.parse_args(argv)
     if args.json is not None and not args.json.parent.is_dir():
         raise ValueError(f"--json {args.json}: the folder {args.json.parent} does not exist")
     tasks.set_threads(args.threads)
-    names = args.only or tasks.names()
+    names = args.only or [name for name in tasks.names() if name != "reach2_obstacle"]
+    driven = args.only is None or "driven" in names or "reach2_obstacle" in names
+    names = [name for name in names if name not in ("driven", "reach2_obstacle")]
     for name in names:
         tasks.describe(name)  # unknown names fail here, in one line
     scale = 20 if args.quick else 1
@@ -150,6 +153,10 @@ def main(argv: list[str] | None = None) -> int:
     print(f"Throws: RK4 step per throw from {flight.STEP_LADDER} for a landing-error bound of "
           f"{flight.DEFAULT_TOLERANCE:g}, all steps in one model by time scaling; {flight.THREADS} thread(s); "
           "batches sorted by flight length.")
+    if driven:
+        from somarm.benchmarks import driven as driven_rows
+
+        driven_rows.print_rows(quick=args.quick, repeats=repeats)
     if args.json is not None:
         _write_json(args.json, {
             "threads": args.threads, "quick": args.quick, "repeats": repeats,

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from somarm import __version__
 from somarm.io import atomic_write_json, atomic_write_text
-from somarm.reproduce import arms, throws
+from somarm.reproduce import arms, delayed, throws
 from somarm.reproduce.common import Context
 from somarm.reproduce.report import Section, claim_record, merge_seeds, render
 from somarm.tasks.base import BACKENDS
@@ -19,7 +19,7 @@ from somarm.validation import check_int
 
 __all__ = ["EXPERIMENTS", "check_names", "reproduce", "load_claims"]
 
-#: Every experiment of the paper, in the paper's order.
+#: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "reach2": arms.reach2,
     "reach20": arms.reach20,
@@ -28,6 +28,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "throw_maps": throws.throw_maps,
     "neighbourhood_q": throws.neighbourhood_q,
     "more_inputs": throws.more_inputs,
+    "delayed_reward": delayed.delayed_reward,
 }
 
 

@@ -1,9 +1,10 @@
-"""Registered tasks: the reaching arms and the projectile launcher of Smith (2002).
+"""Registered tasks: the reaching arms and the projectile launcher of Smith (2002), and a delayed-reward arm.
 
 Two interfaces to the same tasks:
 
 - ``load(name, seed=0, **params)``: a dm_control ``control.Environment`` (dm_env) whose
-  episodes are one step long, as users of ``suite.load`` expect;
+  episodes are one step long, as users of ``suite.load`` expect (``reach2_obstacle``'s last
+  until the goal or the step limit);
 - ``make(name, n_trials=1, seed=0, ...)``: a batched task (``somarm.protocols.BatchedTask``)
   for experiments, evaluated in MuJoCo (default) or by the closed forms (``backend="analytic"``).
 
@@ -24,7 +25,7 @@ __all__ = ["names", "describe", "record", "records", "params_type", "parse_value
            "set_threads", "TaskRecord"]
 
 #: The modules holding task records (each defines ``RECORDS``); a new task module adds one line.
-_MODULES = ("reach", "four_goals", "throw")
+_MODULES = ("reach", "four_goals", "throw", "obstacle")
 _RECORDS: dict[str, TaskRecord] = {}
 
 
@@ -88,14 +89,18 @@ def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend
 
 
 def load(name: str, *, seed: int = 0, **params: Any):
-    """A dm_env environment (``dm_control.rl.control.Environment``) with one-step episodes.
+    """A dm_env environment (``dm_control.rl.control.Environment``).
+
+    Episodes are one step long, except ``reach2_obstacle``'s, which end at the goal (discount 0)
+    or at the step limit (discount 1).
 
     Args:
       name: a registered task. seed: the seed of the observations (as trial 0 of ``make``).
       **params: fields of the task's params dataclass.
 
     Returns:
-      A ``control.Environment``; ``reset()`` draws the observation, ``step(action)`` ends the episode.
+      A ``control.Environment``; ``reset()`` draws the observation (or start pose), ``step(action)``
+      ends a one-step episode.
 
     Raises:
       ValueError: as for ``make``; actions of the wrong shape, non-finite or out of bounds at ``step``.
@@ -103,7 +108,8 @@ def load(name: str, *, seed: int = 0, **params: Any):
     from dm_control.rl import control
 
     physics, task = record(name).environment(make(name, seed=seed, **params))
-    return control.Environment(physics, task, n_sub_steps=1)
+    # A driven arm integrates several timesteps per action (actuated reach, reach2_obstacle).
+    return control.Environment(physics, task, n_sub_steps=getattr(task, "sub_steps", 1))
 
 
 def set_threads(n: int) -> None:

@@ -17,11 +17,13 @@ from dm_control import mujoco as dm_mujoco
 from somarm.tasks.assets import ARM20_LINK_LENGTH, model_path
 from somarm.tasks.pool import shared_pool
 
-__all__ = ["LINK_LENGTHS", "ArmPhysics", "ArmBatch", "fingertips"]
+__all__ = ["LINK_LENGTHS", "TIMESTEP", "ArmPhysics", "ArmBatch", "fingertips"]
 
 #: This project's link lengths (the paper gives none): 0.4 + 0.4, and 20 links of 0.05.
 LINK_LENGTHS: dict[int, np.ndarray] = {2: np.array([0.4, 0.4]), 20: np.full(20, ARM20_LINK_LENGTH)}
 _MODELS = {2: "arm2", 20: "arm20"}
+#: The arm models' timestep (s): the unit of the actuated tasks' settle time and control interval.
+TIMESTEP = 0.01
 #: Arms per batch model: enough to hide Python's per-call cost (the 20-link arm needs fewer).
 _COPIES = {2: 128, 20: 32}
 #: Threads for batches of more than 512 arms (2 by default: a small machine); see ``tasks.set_threads``.
@@ -42,6 +44,14 @@ class ArmPhysics(dm_mujoco.Physics):
         self.data.qpos[:] = angles
         self.data.qvel[:] = 0.0
         mujoco.mj_kinematics(self.model.ptr, self.data.ptr)
+
+    def set_targets(self, targets: np.ndarray) -> None:
+        """Hand joint targets to the position servos (the controls); the next steps track them."""
+        self.data.ctrl[:] = targets
+
+    def angles(self) -> np.ndarray:
+        """The joint angles, ``(nq,)``."""
+        return self.data.qpos.copy()
 
     def fingertip(self) -> np.ndarray:
         """(x, y) of the fingertip site."""

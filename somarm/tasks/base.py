@@ -194,14 +194,13 @@ def step_together(tasks: list[OneStepTask], actions: list[np.ndarray]) -> list[n
     Returns:
       Each task's rewards ``(n_trials_i,)``, in order.
     """
-    if len(tasks) == 1:
-        return [tasks[0].step(actions[0])]
-    steps = [task.begin_step(a) for task, a in zip(tasks, actions, strict=True)]
     kind = type(tasks[0])
-    if all(type(task) is kind for task in tasks):
-        rewards = kind.rewards_together(tasks, steps)
-    else:
-        rewards = [task.rewards(o, a) for task, (o, a) in zip(tasks, steps, strict=True)]
+    pooled = (len(tasks) > 1 and all(type(task) is kind for task in tasks) and issubclass(kind, OneStepTask)
+              and kind.step is OneStepTask.step)  # a task with its own step (multi-step episodes) steps alone
+    if not pooled:
+        return [task.step(a) for task, a in zip(tasks, actions, strict=True)]
+    steps = [task.begin_step(a) for task, a in zip(tasks, actions, strict=True)]
+    rewards = kind.rewards_together(tasks, steps)
     for task in tasks:
         task.end_step()
     return rewards

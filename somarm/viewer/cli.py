@@ -6,6 +6,8 @@ Examples:
     somarm view throw --run runs/throw__somq__seed0        # the fan of Fig. 17, animated
     somarm view reach20 --run DIR --goals 9                # Fig. 11: nine postures at once
     somarm view reach2 --html reach2.html                  # offline page, no server
+    somarm view reach2 --task-set dynamics=actuated --run DIR   # the servos move the arm, animated
+    somarm view reach2_obstacle --run DIR                  # greedy episodes around the wall
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--trial", type=int, default=0, help="which trial of the run to show (default 0)")
     parser.add_argument("--interval", type=float, default=1.5, help="seconds per goal when live (default 1.5)")
     parser.add_argument("--once", action="store_true", help="go through the goals once, then stop")
+    parser.add_argument("--task-set", action="append", default=None, metavar="KEY=VALUE",
+                        help="change a task parameter over the run's (repeatable), e.g. dynamics=actuated")
     return parser
 
 
@@ -51,8 +55,11 @@ def main(argv: list[str] | None = None) -> int:
         check_number("--interval", args.interval, minimum=0.0)
         if args.port is not None and not 0 <= args.port <= 65535:
             raise ValueError(f"--port must be in 0..65535, got {args.port}")
+        from somarm.run_config import parse_assignments
+
+        task_set = parse_assignments(args.task_set, "--task-set")
         session = sessions.load_session(args.task, run=args.run, n_goals=args.goals, seed=args.seed,
-                                        trial=args.trial)
+                                        trial=args.trial, task_set=task_set)
         if args.html is not None:
             from somarm.viewer.client import Recorder
             from somarm.viewer.html import write_html

@@ -14,6 +14,7 @@ import numpy as np
 from somarm.streams import trial_generators
 from somarm.viewer import shows
 from somarm.viewer.client import CommandSink
+from somarm.viewer.motion import MotionShow
 from somarm.viewer.shows import arm_animation
 
 __all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play"]
@@ -30,6 +31,9 @@ class Session:
       errors: ``(n_goals,)`` minus the task's reward for each (the distance missed).
       fan: ``(n_units, action_dim)`` every action unit of the shown trial (the throw fan), or None.
       show: the task's show (``shows.show_for_task``).
+      paths: per goal, the joint angles ``(n_frames, nq)`` MuJoCo moved the arm through (actuated
+        reach: from the start pose until the reward is read; reach2_obstacle: a whole greedy
+        episode), or None where the arm is set, not driven.
     """
 
     task_name: str
@@ -38,6 +42,7 @@ class Session:
     errors: np.ndarray
     fan: np.ndarray | None
     show: object
+    paths: list[np.ndarray] | None = None
 
 
 def greedy_answers(task, learner, observations: np.ndarray, *, trial: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -57,7 +62,7 @@ def _sweep_order(observations: np.ndarray) -> np.ndarray:
 
 
 def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int = 12, seed: int = 0,
-                 trial: int = 0) -> Session:
+                 trial: int = 0, task_set: dict[str, str] | None = None) -> Session:
     """Goals drawn from the task (the ``viewer`` random stream of ``seed``) and the learner's answers.
 
     Args:
@@ -66,6 +71,7 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
       n_goals: how many goals are cycled through (or swept, for reach20).
       seed: seed of the goals (and of the untrained learner).
       trial: which trial of the run's learner is shown.
+      task_set: task parameters changed over the run's (``--task-set``), e.g. ``{"dynamics": "actuated"}``.
 
     Raises:
       ValueError: the run is for another task, or ``trial`` is not one of its trials.
@@ -84,18 +90,41 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         task_params = {}
     if not 0 <= trial < learner.n_trials:
         raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
+    task_params = {**task_params, **tasks.parse_values(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
     task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
+    if getattr(task, "episodic", False):
+        return _episode_session(task_name, task, learner, observations, trial)
     observations = observations[_sweep_order(observations)]
     actions, errors = greedy_answers(task, learner, observations, trial=trial)
     view = tasks.record(task_name).view
     fan = None
     if view == "fan" and hasattr(learner, "action_weights"):
         fan = np.asarray(learner.action_weights)[trial]
+    if getattr(task, "actuated", False):  # from the start pose (all zeros) to where the reward is read
+        moving = task.reached_angles(actions, path=True)
+        paths = [np.vstack([np.zeros((1, task.n_links)), path]) for path in moving]
+        return Session(task_name, observations, actions, errors, None,
+                       MotionShow(shows.show_for_task(task_name, task)), paths)
     show = shows.show_for_task(task_name, task, sweep=len(observations) if view == "sweep" else None)
     return Session(task_name, observations, actions, errors, fan, show)
+
+
+def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: int) -> Session:
+    """Greedy episodes of a multi-step task from ``starts`` ``(n, obs_dim)``, with their MuJoCo paths."""
+
+    def policy(angles: np.ndarray) -> np.ndarray:
+        batch = np.broadcast_to(angles, (learner.n_trials, *angles.shape)).copy()
+        return np.asarray(learner.predict(batch))[trial]
+
+    episodes = task.run_episodes(policy, starts, paths=True)
+    ends = 1 + episodes["length"] * task.control_steps
+    paths = [episodes["path"][k, :ends[k]] for k in range(len(starts))]
+    finals = np.array([path[-1] for path in paths])
+    return Session(task_name, starts, finals, task.distances(finals), None,
+                   MotionShow(shows.show_for_task(task_name, task)), paths)
 
 
 def record(session: Session, sink: CommandSink) -> None:

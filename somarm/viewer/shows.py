@@ -47,6 +47,8 @@ class ArmShow:
       goal_of: maps an observation ``(obs_dim,)`` to the goal's (x, y); default: its first two
         values. When given (four_goals), the observation itself is drawn too, as a blue dot.
       prefix: meshcat path of the drawing.
+      pose_of: maps ``(observation, action)`` to the joint angles drawn; default: the action (the
+        reach tasks' setpoint). reach2_obstacle observes the angles and acts by changing targets.
     """
 
     def __init__(
@@ -55,8 +57,10 @@ class ArmShow:
         *,
         goal_of: Callable[[np.ndarray], np.ndarray] | None = None,
         prefix: str = "/meshcat/arm",
+        pose_of: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     ) -> None:
         self.model = model
+        self.pose_of = pose_of
         self.scene = MujocoScene(model, prefix=prefix)
         self.prefix = path_of(prefix)
         self.shows_input = goal_of is not None
@@ -82,6 +86,12 @@ class ArmShow:
         commands += overlays.camera_commands(center, _plane_view(self.model), 0.95 * self.size)
         return commands
 
+    def with_goal(self, goal: np.ndarray) -> ArmShow:
+        """The same show with a fixed goal (x, y) instead of one read from each observation."""
+        fixed = np.asarray(goal, dtype=np.float64)[:2].copy()
+        self.goal_of = lambda observation: fixed
+        return self
+
     def qpos_of(self, action: np.ndarray) -> np.ndarray:
         """Joint angles of an action, inside the joints' ranges."""
         action = np.asarray(action, dtype=np.float64)
@@ -96,7 +106,8 @@ class ArmShow:
         goal = np.zeros(3)
         goal[:2] = self.goal_of(observation)
         mocap = np.tile(goal, (self.model.nmocap, 1)) if self.model.nmocap else None
-        commands = self.scene.pose_commands(self.qpos_of(action), mocap_pos=mocap)
+        pose = action if self.pose_of is None else self.pose_of(observation, action)
+        commands = self.scene.pose_commands(self.qpos_of(pose), mocap_pos=mocap)
         tip = self.scene.data.site_xpos[self.tip_site].copy()  # current: pose_commands ran mj_kinematics
         self.last_error = float(np.linalg.norm(tip[:2] - goal[:2]))
         commands.append(SetTransform(overlays.translation(tip), self.prefix.append("fingertip")).lower())
@@ -347,4 +358,7 @@ def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
         return _ThrowStream(ThrowShow(model, prefix=f"/meshcat/{task_name}"), trajectory_of, target_of)
     if sweep is not None:
         return SweepShow(model, sweep, goal_of=goal_adapter(task))
+    if getattr(task, "episodic", False):  # reach2_obstacle: the arm where it is (observed), a fixed goal
+        return ArmShow(model, prefix=f"/meshcat/{task_name}",
+                       pose_of=lambda observation, action: np.asarray(observation)[:2]).with_goal(task.goal)
     return ArmShow(model, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")

@@ -1,0 +1,164 @@
+"""reach2_obstacle: real contacts, whole episodes through both interfaces, and a trap for distance-greed."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from somarm import run as runs
+from somarm import tasks
+from somarm.protocols import BatchedTask
+from somarm.tasks import assets, obstacle, obstacle_search
+
+
+def _link_points(angles: np.ndarray) -> np.ndarray:
+    """Points along both links' centre lines, ``(40, 2)``, for joint angles ``(2,)``."""
+    elbow = np.array([0.5, 0.0]) + 0.4 * np.array([np.cos(angles[0]), np.sin(angles[0])])
+    tip = elbow + 0.4 * np.array([np.cos(angles.sum()), np.sin(angles.sum())])
+    share = np.linspace(0.0, 1.0, 20)[:, None]
+    return np.vstack([np.array([0.5, 0.0]) + share * (elbow - [0.5, 0.0]), elbow + share * (tip - elbow)])
+
+
+def _random_actions(task, rng):
+    return rng.uniform(task.action_low, task.action_high, (task.n_trials, 2))
+
+
+def test_the_batched_task_conforms_and_its_episodes_end_at_different_steps():
+    task = tasks.make("reach2_obstacle", n_trials=6, seed=3, step_limit=5)
+    assert isinstance(task, BatchedTask) and task.episodic
+    rng = np.random.default_rng(0)
+    lengths, steps = [], np.zeros(6, dtype=int)
+    for _ in range(12):
+        observations = task.reset()
+        assert observations.shape == (6, 2) and np.isfinite(observations).all()
+        rewards = task.step(_random_actions(task, rng))
+        assert rewards.shape == (6,) and (rewards <= -1.0).all()
+        steps += 1
+        over = task.terminal | task.truncated
+        assert not (task.terminal & task.truncated).any()
+        lengths += steps[over].tolist()
+        steps[over] = 0
+    assert max(lengths) == 5  # truncated at the step limit
+    assert len(lengths) >= 12  # every trial restarted at least twice
+
+
+def test_a_finished_trial_restarts_alone_and_trial_i_is_the_same_alone_or_batched():
+    batch = tasks.make("reach2_obstacle", n_trials=4, seed=7, step_limit=3)
+    alone = tasks.make("reach2_obstacle", n_trials=1, seed=7, trial_ids=[2], step_limit=3)
+    rng = np.random.default_rng(1)
+    restarts = 0
+    for _ in range(8):
+        over = batch.terminal | batch.truncated
+        observations = batch.reset()
+        if batch.t:  # running episodes continue where they were; finished ones start afresh
+            np.testing.assert_array_equal(observations[~over], batch.next_observations[~over])
+            assert not np.isclose(observations[over], batch.next_observations[over]).all(axis=1).any()
+            restarts += int(over.sum())
+        np.testing.assert_array_equal(alone.reset()[0], observations[2])
+        actions = _random_actions(batch, rng)
+        rewards = batch.step(actions)
+        assert alone.step(actions[2:3])[0] == rewards[2]
+        np.testing.assert_array_equal(alone.next_observations[0], batch.next_observations[2])
+        assert alone.truncated[0] == batch.truncated[2] and alone.terminal[0] == batch.terminal[2]
+    assert restarts >= 8
+
+
+def test_the_links_never_pass_through_the_wall_in_random_episodes():
+    task = tasks.make("reach2_obstacle", step_limit=25)
+    rng = np.random.default_rng(2)
+    # Random episodes biased towards the wall (theta1 up), so that the links push into it.
+    starts = task.sample_observations(rng, 24)
+    episodes = task.run_episodes(lambda q: np.column_stack([np.full(len(q), 0.4),
+                                                            rng.uniform(-0.4, 0.4, len(q))]),
+                                 starts, paths=True)
+    model = mujoco.MjModel.from_xml_path(str(assets.model_path("arm2_obstacle")))
+    data = mujoco.MjData(model)
+    wall = model.geom("wall").id
+    deepest, touching = 0.0, 0
+    for angles in episodes["path"].reshape(-1, 2)[::3]:
+        data.qpos[:] = angles
+        mujoco.mj_forward(model, data)
+        for k in range(data.ncon):
+            assert wall in (data.contact[k].geom1, data.contact[k].geom2)
+            touching += 1
+            deepest = max(deepest, -data.contact[k].dist)
+        # No point of a link's centre line is ever inside the wall's middle (a link passing through
+        # would cross it): the wall is x in [0.48, 0.52], y in [0.52, 0.80]; its middle 10 mm here.
+        points = _link_points(angles)
+        inside = (np.abs(points[:, 0] - 0.5) < 0.005) & (points[:, 1] > 0.53) & (points[:, 1] < 0.79)
+        assert not inside.any(), angles
+    assert touching > 50  # the links did press against the wall ...
+    # ... and sank at most 25 mm of overlap (link radius 12 mm + wall half-width 20 mm = 32 mm to the middle).
+    assert deepest < 0.025
+
+
+def test_distance_greed_gets_stuck_at_the_wall_while_a_4_step_path_exists():
+    task = tasks.make("reach2_obstacle")
+    starts = task.sample_observations(np.random.default_rng(0), 8)
+    greedy = task.run_episodes(obstacle_search.distance_greedy_policy(task), starts)
+    assert not greedy["success"].any() and (greedy["length"] == task.params.step_limit).all()
+    plan = obstacle_search.shortest_path(task, obstacle.REST_POSE, max_depth=4)
+    assert plan is not None and len(plan) == 4
+    assert obstacle_search.shortest_path(task, obstacle.REST_POSE, max_depth=3) is None
+    step = iter(plan)
+    replay = task.run_episodes(lambda q: next(step)[None], obstacle.REST_POSE[None])
+    assert replay["success"][0] and replay["length"][0] == 4
+
+
+def test_dm_env_episode_equals_trial_0_of_the_batch():
+    env = tasks.load("reach2_obstacle", seed=5, step_limit=6)
+    batch = tasks.make("reach2_obstacle", seed=5, step_limit=6)
+    rng = np.random.default_rng(3)
+    for _ in range(2):  # two episodes: the second start comes from the same stream
+        first = env.reset()
+        np.testing.assert_array_equal(first.observation["angles"], batch.reset()[0])
+        while True:
+            action = _random_actions(batch, rng)
+            reward = batch.step(action)[0]
+            step = env.step(action[0])
+            assert step.reward == pytest.approx(reward, abs=1e-9)
+            np.testing.assert_allclose(step.observation["angles"], batch.next_observations[0], atol=1e-9)
+            if step.last():
+                assert step.discount == (0.0 if batch.terminal[0] else 1.0)
+                assert batch.terminal[0] or batch.truncated[0]
+                break
+            assert not (batch.terminal[0] or batch.truncated[0])
+            batch.reset()
+        batch.reset()
+
+
+def test_training_hands_the_learner_next_observations_and_terminal_flags():
+    config = runs.RunConfig(task="reach2_obstacle", preset="obstacle", n_steps=60, n_trials=2, block=20,
+                                task_params={"step_limit": "10"})
+    discounted = runs.train(config, progress=False)
+    myopic = runs.train(runs.RunConfig(**{**config.to_dict(), "overrides": {"gamma": "0"}}),
+                            progress=False)
+    # Same observations, actions and rewards up to the first learning step; with gamma > 0 the
+    # Q-values also hold the next state's value, so they differ.
+    assert discounted.learner.t == myopic.learner.t == 60
+    assert not np.array_equal(discounted.learner.q, myopic.learner.q)
+    assert discounted.block_means.shape == (3, 2) and (discounted.block_means <= -1).all()
+
+
+@pytest.mark.parametrize("params, match", [
+    ({"max_step": 0}, r"max_step must be in \[0.01, 1\]"),
+    ({"step_limit": 2.5}, r"step_limit must be a whole number in \[1, 1000\]"),
+    ({"tolerance": "near"}, "tolerance must be a finite number"),
+    ({"wall": 1}, "unknown parameter"),
+])
+def test_bad_obstacle_parameters_are_rejected_in_one_line(params, match):
+    with pytest.raises(ValueError, match=match) as info:
+        tasks.make("reach2_obstacle", **params)
+    assert "\n" not in str(info.value)
+
+
+def test_bad_backend_and_early_step_are_rejected():
+    with pytest.raises(ValueError, match="needs the mujoco backend"):
+        tasks.make("reach2_obstacle", backend="analytic")
+    task = tasks.make("reach2_obstacle")
+    with pytest.raises(ValueError, match="call reset"):
+        task.step(np.zeros((1, 2)))
+    task.reset()
+    with pytest.raises(ValueError, match="must lie inside"):
+        task.step(np.full((1, 2), 0.5))
