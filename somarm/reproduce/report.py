@@ -123,7 +123,7 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
     ]
     for section in sections:
         for c in section.claims:
-            measured = c.measured + (f" Over seeds: {c.spread()}." if c.per_seed else "")
+            measured = c.measured + (f" Over seeds: {c.spread()}." if c.spread() else "")
             cells = [section.name, c.claim, measured, c.test, f"**{c.verdict()}**"]
             lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
     for section in sections:
@@ -137,7 +137,7 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
         for c in section.claims:
             lines.append(
                 f"- **{c.verdict()}**: {c.claim} Measured: {c.measured}"
-                + (f" Over seeds: {c.spread()}." if c.per_seed else "")
+                + (f" Over seeds: {c.spread()}." if c.spread() else "")
                 + (f" Test: {c.test}" if c.test else "")
             )
         if section.notes:
