@@ -77,13 +77,26 @@ def run_group(
     """
     if (label, ctx.seed) not in ctx.trained:
         seeds = ctx.seeds or (ctx.seed,)
-        group = [dataclasses.replace(c, seed=s, backend=ctx.backend) for s in seeds for c in configs]
+        group = [dataclasses.replace(c, seed=s, backend=_backend(c.task, ctx.backend)) for s in seeds for c in configs]
         results = train_group(group, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
         if any(result.interrupted for result in results):
             raise KeyboardInterrupt
         for i, s in enumerate(seeds):
             ctx.trained[(label, s)] = results[i * len(configs):(i + 1) * len(configs)]
     return ctx.trained.pop((label, ctx.seed))
+
+
+def _backend(task: str, backend: str) -> str:
+    """``backend`` where the task has it; MuJoCo for a task without closed forms (reach2_obstacle)."""
+    from somarm import tasks
+
+    if backend == "mujoco":
+        return backend
+    try:
+        tasks.make(task, backend=backend)
+    except ValueError:
+        return "mujoco"
+    return backend
 
 
 def preset_choices(*names: str) -> list[str]:

@@ -106,7 +106,8 @@ def _write(
 ) -> None:
     slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
     where = ("every reward evaluated in MuJoCo (the tasks' default backend)" if backend == "mujoco" else
-             "every reward from the closed forms (backend `analytic`, a quick look; the default is MuJoCo)")
+             "every reward from the closed forms (backend `analytic`, a quick look; the default is MuJoCo; a "
+             "task without closed forms, reach2_obstacle, stays in MuJoCo)")
     seed_text = (f"seed {seeds[0]}" if len(seeds) == 1 else
                  f"{len(seeds)} seeds ({seeds[0]} to {seeds[-1]}: independent trial sets; figures from seed "
                  f"{seeds[0]}; each verdict says in how many seeds the claim holds)")
