@@ -53,6 +53,17 @@ def _pull(weights, x, rate, psi):
 
 
 @numba.njit(cache=True)
+def _shift(weights, k, target, rate, psi, low, high):
+    """Move every unit by ``rate * psi * (target - w_k)`` where psi > 0, kept inside [low, high]: the
+    neighbourhood of unit k shifted by unit k's own SOM step, not pulled towards one point, in place."""
+    for i in range(target.shape[0]):
+        delta = target[i] - weights[k, i]
+        for m in range(weights.shape[0]):
+            if psi[m] > 0.0:
+                weights[m, i] = min(max(weights[m, i] + rate * psi[m] * delta, low[i]), high[i])
+
+
+@numba.njit(cache=True)
 def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high,
                gaussian, winners, units, actions):
     """Steps 1 to 5 for every trial; fills ``winners``, ``units`` and ``actions`` in place.
@@ -102,11 +113,14 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 @numba.njit(cache=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, winners, units, actions,
                  input_weights, action_weights, q, alpha, lambda_s, lambda_a, n_s, n_a,
-                 distances_s, distances_a, neighbourhood_q):
+                 distances_s, distances_a, neighbourhood_q, shifted, low, high):
     """Steps 6 to 9 for every trial, in place on the maps and the Q-table.
 
     ``bootstrap[trial]`` says whether to add ``gamma * max_i Q(s'_j, a_i)`` (s'_j the winner of
-    ``next_observations[trial]`` before this step's input-map update).
+    ``next_observations[trial]`` before this step's input-map update). Step 7 pulls the action
+    map towards ``actions[trial]``, or (``shifted[trial]``, an interpolated greedy step) moves
+    unit k's neighbourhood by unit k's step towards it, kept inside the action bounds ``low``,
+    ``high`` (``somarm.interpolation``; a shift, unlike a pull, could leave them).
     """
     n_units_s = q.shape[1]
     n_units_a = q.shape[2]
@@ -129,7 +143,10 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
             psi_a[n] = max(0.0, 1.0 - distances_a[k, n] / (n_a + 1.0))
         # Step 7: the action map learns only if the perturbed action looks like an improvement.
         if target > q[trial, j, k]:
-            _pull(action_weights[trial], actions[trial], lambda_a, psi_a)
+            if shifted[trial]:
+                _shift(action_weights[trial], k, actions[trial], lambda_a, psi_a, low, high)
+            else:
+                _pull(action_weights[trial], actions[trial], lambda_a, psi_a)
         # Step 8: neighbourhood Q-learning, or the winning pair alone.
         if neighbourhood_q:
             for m in range(n_units_s):

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from .interpolation import MAX_JUMP, NEIGHBOUR_SHARE, n_basis_for
 from .learner_base import initial_generator
 from .som import grid_coordinates, grid_distances, neighbourhood
 from .somq import SOMQConfig, row_width
@@ -38,6 +39,72 @@ def _winner(weights: np.ndarray, x: np.ndarray) -> int:
         if total < best:
             best, winner = total, m
     return winner
+
+def _greedy(q_row: np.ndarray, tie: float) -> int:
+    """The best-Q action unit; ties broken by the uniform number ``tie`` (0 gives the lowest index)."""
+    top = q_row.max()
+    tied = [n for n in range(q_row.size) if q_row[n] == top]
+    return tied[min(int(tie * len(tied)), len(tied) - 1)]
+
+
+def exploring_unit(q_row: np.ndarray, u: float, tie: float, distances_a: np.ndarray) -> int:
+    """The interpolated response's exploring unit: below NEIGHBOUR_SHARE a grid neighbour of the greedy
+    unit (in index order), else a random unit, ``u`` rescaled to [0, 1)."""
+    n_a = q_row.size
+    if u >= NEIGHBOUR_SHARE:
+        return min(int((u - NEIGHBOUR_SHARE) / (1.0 - NEIGHBOUR_SHARE) * n_a), n_a - 1)
+    best = _greedy(q_row, tie)
+    neighbours = [n for n in range(n_a) if 0.0 < distances_a[best, n] <= 1.0]
+    if not neighbours:
+        return best
+    return neighbours[min(int(u / NEIGHBOUR_SHARE * len(neighbours)), len(neighbours) - 1)]
+
+
+def interpolated_response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high):
+    """The interpolated greedy response (``somarm.interpolation``), written out plainly.
+
+    Returns:
+      ``(j, k, response)``: the winning input unit, its greedy action unit, the blended action.
+    """
+    # The n_basis + 1 nearest input units (ties: lower index first), squared distances summed in order.
+    squared = []
+    for m in range(input_weights.shape[0]):
+        total = 0.0
+        for i in range(x.size):
+            diff = x[i] - input_weights[m, i]
+            total += diff * diff
+        squared.append(total)
+    order = sorted(range(len(squared)), key=lambda m: (squared[m], m))[: n_basis + 1]
+    near = [squared[m] for m in order]
+    n_used = min(n_basis, len(order))
+    # Tapered inverse-distance weights: 1/d_i - 1/d_(n_basis+1), normalised; a unit hit exactly wins alone.
+    if near[0] == 0.0:
+        beta = [1.0] + [0.0] * (n_used - 1)
+    else:
+        cut = 1.0 / math.sqrt(near[n_basis]) if len(order) > n_basis else 0.0
+        beta = [1.0 / math.sqrt(near[i]) - cut for i in range(n_used)]
+        total = 0.0
+        for value in beta:
+            total += value
+        beta = [value / total for value in beta] if total > 0.0 else [1.0] + [0.0] * (n_used - 1)
+    # Each unit's greedy action unit; one too far along the action map from the winner's is left out.
+    k = _greedy(q[order[0]], tie)
+    units = [k]
+    kept = beta[0]
+    for i in range(1, n_used):
+        units.append(_greedy(q[order[i]], tie) if beta[i] > 0.0 else k)
+        if beta[i] > 0.0 and distances_a[k, units[i]] > MAX_JUMP:
+            beta[i] = 0.0
+        kept += beta[i]
+    response = np.empty(action_weights.shape[1])
+    for d in range(response.size):
+        value = 0.0
+        for i in range(n_used):
+            if beta[i] > 0.0:
+                value += (beta[i] / kept) * action_weights[units[i], d]
+        response[d] = min(max(value, low[d]), high[d])
+    return order[0], k, response
+
 
 class ReferenceSOMQ:
     """One SOM-Q agent, step by step. Same constructor keywords as ``SOMQ`` but a single trial.
@@ -81,7 +148,10 @@ class ReferenceSOMQ:
         j = _winner(self.input_weights, x)
         # Step 2: a random action unit with probability p, else the best Q for s_j (ties at random).
         n_a = self.q.shape[1]
-        if row[0] < cfg.p.value(t):
+        explored = bool(row[0] < cfg.p.value(t))
+        if explored and cfg.response == "interpolated":
+            k = exploring_unit(self.q[j], row[1], row[2], self.distances_a)
+        elif explored:
             k = min(int(row[1] * n_a), n_a - 1)
         else:
             top = self.q[j].max()
@@ -89,6 +159,11 @@ class ReferenceSOMQ:
             k = tied[min(int(row[2] * len(tied)), len(tied) - 1)]
         # Step 3: the proposed action is a COPY of unit a_k's weights.
         proposed = self.action_weights[k].copy()
+        if cfg.response == "interpolated" and not explored:
+            # ... or, interpolated, the blend of the nearest input units' greedy actions.
+            j, k, proposed = interpolated_response(x, self.input_weights, self.action_weights, self.q, row[2],
+                                                   self.distances_a, n_basis_for(cfg.input_shape),
+                                                   self.action_low, self.action_high)
         # Step 4: perturb each element by random(-1, 1) * epsilon (or Gaussian * epsilon) and keep
         # the result inside the action bounds.
         epsilon = cfg.epsilon.value(t)
@@ -103,24 +178,38 @@ class ReferenceSOMQ:
             scale = epsilon * span[i] if cfg.epsilon_relative else epsilon
             value = proposed[i] + noise * scale
             perturbed[i] = min(max(value, self.action_low[i]), self.action_high[i])
-        self._last = (x, j, k, perturbed)
+        # Step 7's target for unit a_k: where u_k would have to be for the proposal to have been the
+        # perturbed action (the perturbed action itself when the proposal is u_k).
+        target = np.empty_like(perturbed)
+        for i in range(perturbed.size):
+            value = perturbed[i] + (self.action_weights[k, i] - proposed[i])
+            target[i] = min(max(value, self.action_low[i]), self.action_high[i])
+        if cfg.response == "winner":
+            target = perturbed
+        self._last = (x, j, k, target, explored)
         # Step 5: output the perturbed action.
         return perturbed.copy()
 
     def learn(self, reward: float, next_observation=None, terminal: bool = True) -> None:
         """Steps 6 to 10 for the reward that followed the last ``act``."""
         cfg, t = self.config, self.t
-        x, j, k, perturbed = self._last
+        x, j, k, target_k, explored = self._last
         # Step 6 (the reward) and the corrected return r + gamma * max_i Q(s'_j, a_i).
         target = float(reward)
         if cfg.gamma > 0.0 and not terminal:
             x_next = check_array("next_observation", next_observation, (x.size,))
             j_next = _winner(self.input_weights, x_next)
             target = target + cfg.gamma * self.q[j_next].max()
-        # Step 7: move the action map towards the perturbed action only if it looks better.
+        # Step 7: move the action map towards the perturbed action only if it looks better. After an
+        # interpolated greedy proposal the neighbourhood of a_k is shifted by unit a_k's step instead
+        # of pulled towards one point, so that neighbours keep their own places.
         if target > self.q[j, k]:
             rates = cfg.lambda_a.value(t) * neighbourhood(self.distances_a[k], cfg.n_a.value(t))
-            self.action_weights += rates[:, None] * (perturbed - self.action_weights)
+            if cfg.response == "interpolated" and not explored:
+                shifted = self.action_weights + rates[:, None] * (target_k - self.action_weights[k])
+                self.action_weights = np.clip(shifted, self.action_low, self.action_high)
+            else:
+                self.action_weights += rates[:, None] * (target_k - self.action_weights)
         # Step 8: neighbourhood Q-learning (or only the winning pair, -NL).
         alpha = cfg.alpha.value(t)
         psi_s = neighbourhood(self.distances_s[j], cfg.n_s.value(t))

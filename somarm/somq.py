@@ -28,12 +28,15 @@ from typing import Literal
 
 import numpy as np
 
-from . import _kernels
+from . import _kernels, interpolation
 from .learner_base import ConfigBase, LearnerBase, validate_common
 from .schedules import InverseDecay, Schedule
 from .som import winners
 
-__all__ = ["SOMQConfig", "SOMQ", "row_width"]
+__all__ = ["RESPONSES", "SOMQConfig", "SOMQ", "row_width"]
+
+#: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.interpolation``.
+RESPONSES = ("winner", "interpolated")
 
 _F1 = InverseDecay(1000.0)
 
@@ -74,11 +77,16 @@ class SOMQConfig(ConfigBase):
     """Read epsilon as a fraction of each action dimension's range (high - low) instead of in action units."""
     input_init: tuple[float, float] | None = None
     """Range of the initial input weights in every dimension; None = the observation bounds."""
+    response: Literal["winner", "interpolated"] = "winner"
+    """Greedy response: ``winner`` (the paper's: the best action unit of the winning input unit) or
+    ``interpolated`` (a blend over the nearest input units' greedy actions; ``somarm.interpolation``)."""
 
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
         validate_common(self, probabilities=("p",))
+        if self.response not in RESPONSES:
+            raise ValueError(f"response must be one of {', '.join(RESPONSES)}, got {self.response!r}")
 
 
 def row_width(config: SOMQConfig, action_dim: int) -> int:
@@ -117,11 +125,18 @@ class SOMQ(LearnerBase):
             self.action_weights[trial] = self.action_low + span * rng.random((n_a, self.action_dim))
         self.q = np.zeros((self.n_trials, n_s, n_a))
         self._open_streams(row_width(cfg, self.action_dim))
+        self._interpolated = cfg.response == "interpolated"
+        self._n_basis = interpolation.n_basis_for(cfg.input_shape)
+        # With the interpolated response ``_actions`` holds step 7's corrected targets, these the output.
+        self._outputs = np.zeros((self.n_trials, self.action_dim))
+        self._shifted = np.zeros(self.n_trials, dtype=np.bool_)  # stays all False for the winner response
 
     _STATE_ARRAYS = ("input_weights", "action_weights", "q")
+    # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
+    _PENDING_ARRAYS = LearnerBase._PENDING_ARRAYS + ("_shifted",)
 
     def act(self, observations) -> np.ndarray:
-        """Steps 1 to 5: an exploring action per trial.
+        """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
 
         Args:
           observations: ``(n_trials, obs_dim)``, finite.
@@ -130,14 +145,24 @@ class SOMQ(LearnerBase):
           Perturbed actions ``(n_trials, action_dim)`` inside the action bounds (a fresh array).
 
         Raises:
-          ValueError: wrong shape, NaN or inf.
+          ValueError: wrong shape, NaN or inf; or the previous act() still waits for its learn().
         """
+        self._check_not_pending()
         x = self._check_observations(observations, finite=False)
         if not _kernels.all_finite(x):  # before a random row is used
             raise ValueError("observations must be finite, got NaN or inf")
         rows = self._streams.next()
         values = self._current()
         self._observations[...] = x
+        if self._interpolated:
+            interpolation.act_kernel(
+                self._observations, self.input_weights, self.action_weights, self.q, rows, values["p"],
+                self._epsilons(values["epsilon"]), self.action_low, self.action_high,
+                self.config.noise == "gaussian", self._distances_a, self._n_basis, self._winners,
+                self._units, self._outputs, self._actions, self._shifted,
+            )
+            self._pending = True
+            return self._outputs.copy()
         _kernels.act_kernel(
             self._observations, self.input_weights, self.action_weights, self.q, rows,
             values["p"], self._epsilons(values["epsilon"]), self.action_low, self.action_high,
@@ -167,7 +192,8 @@ class SOMQ(LearnerBase):
             r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
             values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
-            self._distances_s, self._distances_a, self.config.neighbourhood_q,
+            self._distances_s, self._distances_a, self.config.neighbourhood_q, self._shifted,
+            self.action_low, self.action_high,
         )
         self._pending = False
         self.t += 1
@@ -195,6 +221,14 @@ class SOMQ(LearnerBase):
         Returns:
           ``(n_trials, action_dim)`` or ``(n_trials, n_obs, action_dim)``.
         """
+        if self._interpolated:
+            x = self._check_observations(observations, allow_many=True)
+            many = x.reshape(self.n_trials, -1, self.obs_dim)
+            out = np.empty((self.n_trials, many.shape[1], self.action_dim))
+            interpolation.predict_kernel(np.ascontiguousarray(many), self.input_weights, self.action_weights,
+                                         self.q, self._distances_a, self._n_basis, self.action_low,
+                                         self.action_high, out)
+            return out.reshape(x.shape[:-1] + (self.action_dim,))
         _, units = self.greedy_units(observations)
         index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))
         return self.action_weights[index, units]

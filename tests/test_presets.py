@@ -8,7 +8,7 @@ from somarm.motoric import MotoricConfig
 from somarm.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.somq import SOMQConfig
 
-NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a"]
+NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table5+"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
@@ -18,6 +18,15 @@ def test_every_table_is_available_by_name_with_a_description():
         line = presets.describe(name)
         assert line.startswith("Table") and "\n" not in line and "Fig" in line
         assert presets.PRESETS[name].config is presets.get(name)
+
+
+def test_plus_presets_change_only_schedules_of_their_table():
+    for name, changed in (("table1+", {"lambda_a"}), ("table5+", set(SOMQConfig.SCHEDULES))):
+        base, plus = presets.get(name[:-1]).to_dict(), presets.get(name).to_dict()
+        assert {key for key in base if base[key] != plus[key]} == changed
+        assert plus["response"] == "winner"
+    assert presets.get("table1+").lambda_a.value(10**6) == 0.1
+    assert presets.get("table5+").epsilon.value(10**6) == 0.02
 
 
 def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():

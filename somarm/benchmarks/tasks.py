@@ -13,7 +13,6 @@ to the default two threads shows how much of the machine the run actually got.
 
 from __future__ import annotations
 
-import argparse
 import time
 from pathlib import Path
 
@@ -23,6 +22,7 @@ from somarm import tasks
 from somarm.io import atomic_write_json
 from somarm.tasks import flight
 from somarm.tasks import throw as throw_module
+from somarm.validation import OneLineParser, check_int
 
 __all__ = ["TARGETS", "measure", "main"]
 
@@ -106,7 +106,7 @@ def _step_ms(name: str, n_trials: int, steps: int, rng: np.random.Generator, rep
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table (and write ``--json``); returns 0 (a benchmark reports, it does not fail)."""
-    parser = argparse.ArgumentParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small batches, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--only", nargs="+", metavar="TASK",
@@ -114,9 +114,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=2, help="threads of the MuJoCo backend (2)")
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write every figure to FILE (JSON)")
     args = parser.parse_args(argv)
+    check_int("--repeats", args.repeats)
     if args.json is not None and not args.json.parent.is_dir():
         raise ValueError(f"--json {args.json}: the folder {args.json.parent} does not exist")
-    tasks.set_threads(args.threads)
+    tasks.set_threads(check_int("--threads", args.threads))
     names = args.only or [name for name in tasks.names() if name != "reach2_obstacle"]
     driven = args.only is None or "driven" in names or "reach2_obstacle" in names
     names = [name for name in names if name not in ("driven", "reach2_obstacle")]

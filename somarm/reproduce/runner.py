@@ -11,7 +11,7 @@ from pathlib import Path
 
 from somarm import __version__
 from somarm.io import atomic_write_json, atomic_write_text
-from somarm.reproduce import arms, delayed, throws
+from somarm.reproduce import arms, beyond, delayed, throws
 from somarm.reproduce.common import Context
 from somarm.reproduce.report import Section, claim_record, merge_seeds, render
 from somarm.tasks.base import BACKENDS
@@ -29,6 +29,8 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "neighbourhood_q": throws.neighbourhood_q,
     "more_inputs": throws.more_inputs,
     "delayed_reward": delayed.delayed_reward,
+    # Not the paper's: its suggested continuous response (issue 11), apart from the paper's claims.
+    "beyond": beyond.beyond,
 }
 
 
@@ -86,6 +88,10 @@ def reproduce(
             )
             status = 130
             break
+        except ValueError as exc:  # a figure that cannot be written (a full disk): keep the report so far
+            _keep_report(out, sections, total=time.perf_counter() - start, **settings)
+            raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
+                             "experiment(s) that finished") from None
         section = parts[0] if seeds == 1 else merge_seeds(parts, list(all_seeds))
         section.wall_time_s = time.perf_counter() - began
         sections.append(section)
@@ -98,6 +104,14 @@ def reproduce(
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold{over}; {total:.1f} s)")
     return status
+
+
+def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
+    """Write the report of the finished experiments, if there is room for it (best effort)."""
+    try:
+        _write(out, sections, complete=False, **kwargs)
+    except ValueError:
+        pass  # the report of the previous experiment stays as it was
 
 
 def _write(
