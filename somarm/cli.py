@@ -127,15 +127,18 @@ def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
     from somarm.run_folder import REPORT_FILES, claim
     from somarm.stopping import sigterm_as_interrupt
+    from somarm.validation import check_int
 
     runner.check_names(args.only)
+    check_int("seeds", args.seeds)
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
     # into an earlier one: its REPORT.md and claims.json would then mix two runs).
     owner = claim(out, force=args.force, products=REPORT_FILES, what="a report")
     sigterm_as_interrupt()
     try:
-        return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
+        return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress,
+                                seeds=args.seeds, backend=args.backend)
     finally:
         owner.release()
 
@@ -209,6 +212,10 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--force", action="store_true", help="replace the report already in --out")
     reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
+    reproduce.add_argument("--seeds", type=int, default=1, metavar="N",
+                           help="run every experiment at N seeds; verdicts say in how many they hold (1)")
+    reproduce.add_argument("--backend", default="mujoco", choices=("mujoco", "analytic"),
+                           help="where rewards are computed: mujoco (default) or analytic (closed forms, quick)")
     reproduce.set_defaults(func=_cmd_reproduce)
 
     comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")

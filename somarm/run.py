@@ -159,63 +159,80 @@ def train(config: RunConfig, *, progress: bool = True, on_step: StepHook | None 
 
 def train_group(configs: list[RunConfig], *, progress: bool = True, on_step: StepHook | None = None,
                 label: str | None = None, snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
-    """Train several learners in lockstep on one task, with one physics call per step for all.
+    """Train several learners in lockstep, with one physics call per step for all (``RunGroup``).
 
-    The configs may differ only in their learner settings (learner, preset, overrides, trials);
-    they share task, task parameters, backend, seed, steps and block. Each config's trials see the
-    same observations and random numbers as when trained alone, so results equal ``train``'s.
-    Comparisons (Figs. 13, 21-24) run this way: the physics, not the learner, dominates their cost.
+    The configs share backend, steps and block; those of one task, task parameters and seed share
+    one batched task. Each config's trials see the same observations and random numbers as when
+    trained alone, so results equal ``train``'s. Comparisons (Figs. 13, 21-24), Fig. 25's four
+    experiments and ``reproduce --seeds`` run this way: the physics dominates their cost.
 
     Returns:
-      One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays.
+      One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays (one task).
     """
     return RunGroup(configs).train(progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)
 
 
 class RunGroup:
-    """Configs that share a task, resolved and built once: one task for all trials, one learner each.
+    """Configs trained in lockstep, resolved and built once: a task per task, task parameters and
+    seed (shared by the configs that share those), one learner each.
 
-    Building is where a bad preset, ``--set`` or ``--task-set`` fails, so a caller can build
-    first (fail fast), then prepare its output, then ``train`` what it built.
+    Configs of one task differ only in their learner settings (learner, preset, overrides, trials)
+    and share one batched task; configs of different tasks or seeds (Fig. 25's experiments A-D,
+    ``reproduce --seeds``) get a task each, stepped together with one physics call where the tasks
+    allow it (``tasks.base.step_together``: several throw tasks fly in one batch). Building is
+    where a bad preset, ``--set`` or ``--task-set`` fails, so a caller can build first (fail fast),
+    then prepare its output, then ``train`` what it built.
 
     Raises:
-      ValueError: a bad setting, or configs that do not share task, task parameters, backend,
-        seed, steps and block.
+      ValueError: a bad setting, or configs that do not share backend, steps and block.
     """
 
     def __init__(self, configs: list[RunConfig]) -> None:
         self.configs = [c.resolved() for c in configs]
-        shared = {
-            (c.task, json.dumps(c.task_params, sort_keys=True), c.backend, c.seed, c.n_steps, c.block)
-            for c in self.configs
-        }
-        if len(shared) != 1:
-            raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
-        first = self.configs[0]
+        if len({(c.backend, c.n_steps, c.block) for c in self.configs}) != 1:
+            raise ValueError("a group shares backend, steps and block; these differ")
         check_memory_needs(self.configs)
-        self.task = make_task(first, np.concatenate([c.trial_ids_array() for c in self.configs]))
-        self.learners = [make_learner(c, self.task) for c in self.configs]
-        bounds = np.cumsum([0] + [c.n_trials for c in self.configs])
-        self.parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        keys = [(c.task, json.dumps(c.task_params, sort_keys=True), c.seed) for c in self.configs]
+        distinct = list(dict.fromkeys(keys))
+        self.tasks = []
+        for key in distinct:
+            members = [c for c, k in zip(self.configs, keys, strict=True) if k == key]
+            self.tasks.append(make_task(members[0], np.concatenate([c.trial_ids_array() for c in members])))
+        self.task = self.tasks[0]
+        # Each config owns a slice of its task's trials and a slice of the curves' columns.
+        self.owners, self.parts, self.columns = [], [], []
+        offsets = np.cumsum([0] + [t.n_trials for t in self.tasks])
+        filled = [0] * len(self.tasks)
+        for key, config in zip(keys, self.configs, strict=True):
+            i = distinct.index(key)
+            self.owners.append(i)
+            self.parts.append(slice(filled[i], filled[i] + config.n_trials))
+            self.columns.append(slice(int(offsets[i]) + filled[i], int(offsets[i]) + filled[i] + config.n_trials))
+            filled[i] += config.n_trials
+        self.learners = [make_learner(c, self.tasks[i]) for c, i in zip(self.configs, self.owners, strict=True)]
 
     def train(self, *, progress: bool = True, on_step: StepHook | None = None, label: str | None = None,
               snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
-        """Train the built learners once (see ``train_group``); one ``RunResult`` per config."""
+        """Train the built learners once (see ``train_group``); one ``RunResult`` per config.
+
+        Raises:
+          ValueError: ``on_step`` for a group of several tasks or seeds.
+        """
         first = self.configs[0]
-        curves = loop(self.task, self.learners, self.parts, n_steps=first.n_steps, block=first.block,
-                      progress=progress, on_step=on_step, label=label or f"{first.task}/{first.learner}",
-                      snapshots_at=snapshots_at)
+        curves = loop(self.tasks, self.learners, self.parts, owners=self.owners, n_steps=first.n_steps,
+                      block=first.block, progress=progress, on_step=on_step,
+                      label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at)
         results = []
-        for config, learner, part, taken in zip(self.configs, self.learners, self.parts, curves.snapshots,
-                                                strict=True):
+        for config, learner, column, taken in zip(self.configs, self.learners, self.columns, curves.snapshots,
+                                                  strict=True):
             own_task = self.task if len(self.configs) == 1 else make_task(config)
             own_task.set_step(curves.steps_done)  # its phase (four_goals) is the one the learner reached
             results.append(RunResult(
                 config=config,
                 learner=learner,
                 task=own_task,
-                block_means=curves.block_means[:, part].copy(),
-                block_sq_means=curves.block_sq_means[:, part].copy(),
+                block_means=curves.block_means[:, column].copy(),
+                block_sq_means=curves.block_sq_means[:, column].copy(),
                 steps_done=curves.steps_done,
                 wall_time=curves.wall_time,
                 interrupted=curves.interrupted,

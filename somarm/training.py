@@ -44,66 +44,80 @@ class Curves:
 
 
 def loop(
-    task: BatchedTask,
+    task: BatchedTask | list[BatchedTask],
     learners: list[Learner],
     parts: list[slice],
     *,
     n_steps: int,
     block: int,
+    owners: list[int] | None = None,
     progress: bool = True,
     on_step: StepHook | None = None,
     label: str = "",
     snapshots_at: tuple[int, ...] = (),
 ) -> Curves:
-    """Train ``learners`` (learner i owns trials ``parts[i]`` of ``task``) for ``n_steps`` steps.
+    """Train ``learners`` (learner i owns trials ``parts[i]`` of its task) for ``n_steps`` steps.
 
     Ctrl-C or SIGTERM stops at the end of the current step (``interrupted=True``); an
     ``on_step`` hook that raises ``KeyboardInterrupt`` stops the same way.
 
     Args:
-      task: the batched task of all trials.
-      learners: the learners, acting on their slices of the observations.
-      parts: learner i's trials, ``slice``s covering ``range(task.n_trials)``.
+      task: the batched task of all trials, or several tasks stepped together each step (one
+        physics call where they allow it: ``tasks.base.step_together``).
+      learners: the learners, acting on their slices of their task's observations.
+      parts: learner i's trials, ``slice``s covering ``range(n_trials)`` of each task.
       n_steps: steps to take. block: steps per recorded point of the learning curves.
+      owners: the index of each learner's task (default: all the first).
       progress: draw a progress bar with the running mean reward on stderr.
-      on_step: called as ``on_step(step, observations, actions, rewards)`` after every step; cheap.
+      on_step: called as ``on_step(step, observations, actions, rewards)`` after every step; cheap
+        (one task only).
       label: progress-bar label.
       snapshots_at: steps after which to copy each learner's maps.
 
     Returns:
-      The ``Curves`` of every trial.
+      The ``Curves`` of every trial, the tasks' trials side by side in task order.
+
+    Raises:
+      ValueError: ``on_step`` with several tasks.
     """
-    n_trials = task.n_trials
+    from somarm.tasks.base import step_together
+
+    tasks = task if isinstance(task, list) else [task]
+    owners = [0] * len(learners) if owners is None else owners
+    if len(tasks) > 1 and on_step is not None:
+        raise ValueError("on_step needs a group on one task and seed")
+    n_trials = sum(t.n_trials for t in tasks)
     n_blocks = n_steps // block
     block_means = np.zeros((n_blocks, n_trials))
     block_sq_means = np.zeros((n_blocks, n_trials))
     accumulated = np.zeros(n_trials)
     accumulated_sq = np.zeros(n_trials)
-    actions = np.empty((n_trials, task.action_low.size))
+    actions = [np.empty((t.n_trials, t.action_low.size)) for t in tasks]
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in learners]
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
-    episodic = bool(getattr(task, "episodic", False))  # multi-step episodes (reach2_obstacle)
+    episodic = [bool(getattr(t, "episodic", False)) for t in tasks]  # multi-step episodes (reach2_obstacle)
     start = time.perf_counter()
     step = 0
     interrupted = False
     with stop_between_steps() as stop:
         try:
             while step < n_steps:
-                observations = task.reset()
-                for learner, part in zip(learners, parts, strict=True):
-                    actions[part] = learner.act(observations[part])
-                rewards = task.step(actions)
-                for learner, part in zip(learners, parts, strict=True):
-                    if episodic:  # the next state and whether the episode ended there
-                        learner.learn(rewards[part], task.next_observations[part], task.terminal[part])
+                observations = [t.reset() for t in tasks]
+                for learner, i, part in zip(learners, owners, parts, strict=True):
+                    actions[i][part] = learner.act(observations[i][part])
+                rewards_of = step_together(tasks, actions)
+                for learner, i, part in zip(learners, owners, parts, strict=True):
+                    if episodic[i]:  # the next state and whether the episode ended there
+                        learner.learn(rewards_of[i][part], tasks[i].next_observations[part], tasks[i].terminal[part])
                     else:
-                        learner.learn(rewards[part])
+                        learner.learn(rewards_of[i][part])
+                rewards = rewards_of[0] if len(tasks) == 1 else np.concatenate(rewards_of)
                 accumulated += rewards
                 accumulated_sq += rewards * rewards
                 step += 1
                 if on_step is not None:
-                    on_step(step, observations, actions, rewards)
+                    on_step(step, observations[0], actions[0], rewards)
                 if step % block == 0:
                     index = step // block - 1
                     block_means[index] = accumulated / block

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from somarm import ballistics, tasks
-from somarm.tasks import flight
+from somarm.tasks import flight, launcher
 from somarm.tasks.throw import RANGES, TABLE3, ThrowParams, landing_x, simulate_trajectory
 
 
@@ -135,3 +135,44 @@ def test_params_for_an_observation_drive_the_same_flight_as_the_task():
     assert -abs(params.X - xy[-1, 0]) == pytest.approx(float(reward), abs=1e-12)
     _, default = simulate_trajectory(0.7, 0.6)  # no params: Table 3
     assert default[-1, 0] == pytest.approx(ballistics.landing_x(0.7, 0.6), abs=1e-6)
+
+
+def test_a_throw_lands_at_the_same_x_in_any_chunking_or_threading():
+    throws = _random_throws(300, 3)
+    args = (throws["ux"], throws["uy"])
+    kwargs = {"G": 0.05, "Fr": throws["Fr"], "W": throws["W"], "M": throws["M"]}
+    reference = flight.landing_x(*args, **kwargs)
+    for chunk, threads in ((1, 1), (7, 2), (256, 1), (64, 2)):
+        np.testing.assert_array_equal(flight.landing_x(*args, **kwargs, chunk=chunk, n_threads=threads), reference)
+    # A training step's batch of 20 and a throw alone, as the tasks call it.
+    part = slice(40, 60)
+    small = flight.landing_x(args[0][part], args[1][part], G=0.05, Fr=throws["Fr"][part], W=throws["W"][part],
+                             M=throws["M"][part])
+    np.testing.assert_array_equal(small, reference[part])
+
+
+def test_the_dm_env_launcher_lands_where_the_batch_does():
+    throws = _random_throws(40, 4)
+    batch = landing_x(throws["ux"], throws["uy"], Fr=throws["Fr"], W=throws["W"], M=throws["M"])
+    physics = launcher.load_physics()
+    for i in range(40):
+        c = {k: float(throws[k][i]) for k in ("Fr", "W", "M")}
+        physics.set_conditions(**c)
+        ux, uy = float(throws["ux"][i]), float(throws["uy"][i])
+        launch = physics.launch(ux, uy, step=float(flight.step_for(ux, c["W"], c["Fr"] / c["M"])))
+        physics.step()  # the dm_env takes the first step itself
+        assert float(physics.fly(previous=launch)[0]) == batch[i]
+
+
+def test_chunks_cover_the_sorted_batch_in_order_and_respect_the_size():
+    rng = np.random.default_rng(0)
+    for n, size in ((1, 256), (20, 256), (100, 256), (3000, 256), (50, 8)):
+        lengths = np.sort(rng.uniform(0.0, 160.0, n))
+        bounds = flight._partition(lengths, size)
+        assert bounds[0][0] == 0 and bounds[-1][1] == n
+        assert all(a < b <= a + size for a, b in bounds)
+        assert all(b == a2 for (_, b), (a2, _) in zip(bounds, bounds[1:], strict=False))
+    # Large batches use (nearly) full chunks; a small one is cut into a few chunks of similar flights.
+    sizes = np.diff(np.array(flight._partition(np.sort(rng.uniform(0, 160, 3000)), 256)), axis=1)
+    assert sizes[sizes >= 200].sum() >= 0.8 * 3000
+    assert 1 < len(flight._partition(np.sort(rng.uniform(0, 160, 100)), 256)) < 10

@@ -46,8 +46,29 @@ def test_group_in_lockstep_equals_separate_runs():
         alone = run.train(config, progress=False)
         np.testing.assert_array_equal(result.block_means, alone.block_means)
         np.testing.assert_array_equal(result.learner.action_weights, alone.learner.action_weights)
-    with pytest.raises(ValueError, match="shares task"):
-        run.train_group([_tiny(), _tiny(seed=9)], progress=False)
+    with pytest.raises(ValueError, match="shares backend, steps and block"):
+        run.train_group([_tiny(), _tiny(n_steps=500)], progress=False)
+
+
+def test_group_of_different_throw_tasks_equals_separate_runs():
+    # Fig. 25's lockstep: several throw tasks share one batch of flights per step (and a task twice).
+    configs = [
+        _tiny(task="throw_distance", preset="table7a", n_steps=300, task_params={"punish_low": True}),
+        _tiny(task="throw_mass", n_steps=300, n_trials=3, task_params={"punish_low": True}),
+        _tiny(task="throw_distance", preset="table7a", n_steps=300, task_params={"punish_low": True},
+              overrides={"neighbourhood_q": "false"}),
+        _tiny(task="throw_wind", n_steps=300),
+        _tiny(task="throw_wind", n_steps=300, seed=8),  # another seed: independent trials, same step
+    ]
+    group = run.train_group(configs, progress=False)
+    for config, result in zip(configs, group, strict=True):
+        alone = run.train(config, progress=False)
+        np.testing.assert_array_equal(result.block_means, alone.block_means)
+        np.testing.assert_array_equal(result.block_sq_means, alone.block_sq_means)
+        np.testing.assert_array_equal(result.learner.q, alone.learner.q)
+        assert result.task.name == config.task
+    with pytest.raises(ValueError, match="on_step needs a group on one task and seed"):
+        run.train_group(configs, progress=False, on_step=lambda *args: None)
 
 
 def test_interrupt_leaves_valid_partial_run(tmp_path):

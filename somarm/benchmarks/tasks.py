@@ -5,18 +5,21 @@ are evaluated in one batched call through MuJoCo (the default backend) and throu
 analytic backend, in the same run, so their ratio is meaningful on a busy machine. Beside them:
 the largest difference between the two (the landing error for the throws, the fingertip
 error for the arms), the cost of one dm_env episode (``tasks.load``), and the cost of one
-training step of 100 trials (``reset`` + ``step``), which is what an experiment pays.
-Each rate is the best of ``--repeats`` runs. ``--threads 1`` gives the one-core figures, whose ratio
+training step (``reset`` + ``step``) of 100 and of 20 trials, which is what an experiment pays,
+also as a multiple of the large batch's cost per evaluation (all measured in the same run).
+Each rate is the best of ``--repeats`` runs; ``--json FILE`` writes every figure. ``--threads 1`` gives the one-core figures, whose ratio
 to the default two threads shows how much of the machine the run actually got.
 """
 
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 
 from somarm import tasks
+from somarm.io import atomic_write_json
 from somarm.tasks import flight
 from somarm.tasks import throw as throw_module
 from somarm.validation import OneLineParser, check_int
@@ -74,33 +77,46 @@ def measure(name: str, *, n: int, repeats: int, episodes: int, steps: int) -> di
     }
     env = tasks.load(name)
     env_actions = actions[:episodes]
-    start = time.perf_counter()
-    for action in env_actions:
-        env.reset()
-        env.step(action)
-    figures["dm_env_us"] = (time.perf_counter() - start) / len(env_actions) * 1e6
-    batch = tasks.make(name, n_trials=100)
-    trial_actions = rng.uniform(batch.action_low, batch.action_high, (steps, 100, batch.action_low.size))
-    batch.reset()
-    batch.step(trial_actions[0])  # this thread's batch model is built here, outside the timing
-    start = time.perf_counter()
-    for a in trial_actions:
-        batch.reset()
-        batch.step(a)
-    figures["step100_ms"] = (time.perf_counter() - start) / steps * 1e3
+
+    def episodes_run():
+        for action in env_actions:
+            env.reset()
+            env.step(action)
+
+    figures["dm_env_us"] = 1e6 / _best_rate(episodes_run, len(env_actions), repeats)
+    for n_trials in (100, 20):
+        figures[f"step{n_trials}_ms"] = _step_ms(name, n_trials, steps, rng, repeats)
     return figures
 
 
+def _step_ms(name: str, n_trials: int, steps: int, rng: np.random.Generator, repeats: int) -> float:
+    """Milliseconds per training step (``reset`` + ``step``) of ``n_trials`` trials, best of ``repeats``."""
+    batch = tasks.make(name, n_trials=n_trials)
+    trial_actions = rng.uniform(batch.action_low, batch.action_high, (steps, n_trials, batch.action_low.size))
+    batch.reset()
+    batch.step(trial_actions[0])  # this thread's batch models are built here, outside the timing
+
+    def run():
+        for a in trial_actions:
+            batch.reset()
+            batch.step(a)
+
+    return 1e3 / _best_rate(run, steps, repeats)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Print the table; returns 0 (a benchmark reports, it does not fail)."""
+    """Print the table (and write ``--json``); returns 0 (a benchmark reports, it does not fail)."""
     parser = OneLineParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small batches, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--only", nargs="+", metavar="TASK",
                         help="benchmark only these tasks ('driven': the actuated and obstacle rows)")
     parser.add_argument("--threads", type=int, default=2, help="threads of the MuJoCo backend (2)")
+    parser.add_argument("--json", type=Path, metavar="FILE", help="also write every figure to FILE (JSON)")
     args = parser.parse_args(argv)
     check_int("--repeats", args.repeats)
+    if args.json is not None and not args.json.parent.is_dir():
+        raise ValueError(f"--json {args.json}: the folder {args.json.parent} does not exist")
     tasks.set_threads(check_int("--threads", args.threads))
     names = args.only or [name for name in tasks.names() if name != "reach2_obstacle"]
     driven = args.only is None or "driven" in names or "reach2_obstacle" in names
@@ -110,25 +126,53 @@ def main(argv: list[str] | None = None) -> int:
     scale = 20 if args.quick else 1
     repeats = 1 if args.quick else max(1, args.repeats)
     episodes, steps = (30, 5) if args.quick else (300, 40)
-    print(f"{'task':15s} {'MuJoCo/s':>11s} {'analytic/s':>11s} {'ratio':>7s} {'|MJ-exact|':>10s} "
-          f"{'dm_env us':>9s} {'100-trial step ms':>17s}  target")
+    print(f"{'task':15s} {'MuJoCo/s':>10s} {'analytic/s':>10s} {'ratio':>6s} {'|MJ-exact|':>10s} "
+          f"{'dm_env us':>9s} {'step100 ms':>10s} {'x batch':>7s} {'step20 ms':>9s} {'x batch':>7s}  target")
+    results = {}
     for name in names:
         n = max(1000, (_SIZES.get(name, _THROWS)) // scale)
         f = measure(name, n=n, repeats=repeats, episodes=episodes, steps=steps)
+        # Cost per evaluation in a training step, as a multiple of its cost in the large batch.
+        f["step100_x"] = f["step100_ms"] * 1e-3 / 100 * f["mujoco"]
+        f["step20_x"] = f["step20_ms"] * 1e-3 / 20 * f["mujoco"]
+        results[name] = f
         target = TARGETS.get(name)
         verdict = ""
         if target is not None:
             verdict = f">= {target:.0e}/s: {'met' if f['mujoco'] >= target else 'MISSED'}"
             if name.startswith("throw"):
                 verdict += f"; error <= 1e-6: {'met' if f['difference'] <= 1e-6 else 'MISSED'}"
-        print(f"{name:15s} {f['mujoco']:11.3g} {f['analytic']:11.3g} {f['analytic'] / f['mujoco']:7.0f} "
-              f"{f['difference']:10.1e} {f['dm_env_us']:9.0f} {f['step100_ms']:17.2f}  {verdict}", flush=True)
+                verdict += (f"; steps <= 2x/4x: {'met' if f['step100_x'] <= 2 else 'MISSED'}/"
+                            f"{'met' if f['step20_x'] <= 4 else 'MISSED'}")
+        print(f"{name:15s} {f['mujoco']:10.3g} {f['analytic']:10.3g} {f['analytic'] / f['mujoco']:6.0f} "
+              f"{f['difference']:10.1e} {f['dm_env_us']:9.0f} {f['step100_ms']:10.2f} {f['step100_x']:7.2f} "
+              f"{f['step20_ms']:9.2f} {f['step20_x']:7.2f}  {verdict}", flush=True)
     print("MuJoCo/s and analytic/s: evaluations per second in one batched call, same inputs; "
-          "|MJ-exact|: largest landing (throws) or fingertip (arms) difference.")
+          "|MJ-exact|: largest landing (throws) or fingertip (arms) difference; step100/step20: one "
+          "training step (reset + step) of 100/20 trials, and its cost per evaluation as a multiple "
+          "of the large batch's.")
     print(f"Throws: RK4 step per throw from {flight.STEP_LADDER} for a landing-error bound of "
-          f"{flight.DEFAULT_TOLERANCE:g}; {flight.THREADS} thread(s); batches sorted by step and u_y.")
+          f"{flight.DEFAULT_TOLERANCE:g}, all steps in one model by time scaling; {flight.THREADS} thread(s); "
+          "batches sorted by flight length.")
     if driven:
         from somarm.benchmarks import driven as driven_rows
 
         driven_rows.print_rows(quick=args.quick, repeats=repeats)
+    if args.json is not None:
+        _write_json(args.json, {
+            "threads": args.threads, "quick": args.quick, "repeats": repeats,
+            "tasks": {name: {"mujoco_per_s": f["mujoco"], "analytic_per_s": f["analytic"],
+                             "difference": f["difference"], "dm_env_us": f["dm_env_us"],
+                             "step100_ms": f["step100_ms"], "step100_x_batch": f["step100_x"],
+                             "step20_ms": f["step20_ms"], "step20_x_batch": f["step20_x"]}
+                      for name, f in results.items()},
+        })
+        print(f"figures written to {args.json}")
     return 0
+
+
+def _write_json(path: Path, figures: dict) -> None:
+    try:
+        atomic_write_json(path, figures)
+    except OSError as exc:
+        raise ValueError(f"cannot write --json {path}: {exc.strerror or exc}") from None

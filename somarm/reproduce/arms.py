@@ -75,7 +75,7 @@ def reach2(ctx: Context) -> Section:
     ax.grid(alpha=0.3)
     decay = learner.config.alpha.decay
     _overlay_schedule(ax, result.steps, decay, f"f(t) = {decay}")
-    section.figures.append(plots.save(fig, ctx.path("fig07_reach2_mean.png")))
+    section.figures.append(ctx.save(fig, "fig07_reach2_mean.png"))
 
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     smoothed = plots.moving_average(result.block_means, 10)
@@ -86,7 +86,7 @@ def reach2(ctx: Context) -> Section:
         title=f"Fig. 8: reach2, each of the {n_trials} trials",
     )
     ax.grid(alpha=0.3)
-    section.figures.append(plots.save(fig, ctx.path("fig08_reach2_trials.png")))
+    section.figures.append(ctx.save(fig, "fig08_reach2_trials.png"))
 
     median = float(np.median(errors))
     failed = int((errors > 2 * median).sum())
@@ -98,6 +98,7 @@ def reach2(ctx: Context) -> Section:
             f"({fmt(2 * median)}); final errors {fmt(errors.min())} to {fmt(errors.max())}.",
             failed <= allowed,
             f"failures <= {allowed}",
+            values={"failing trials": failed},
         )
     )
 
@@ -109,6 +110,7 @@ def reach2(ctx: Context) -> Section:
             f"training error in the last 1000 steps {fmt(errors.mean())}.",
             bool(np.median(greedy) <= 0.05),
             "median greedy distance <= 0.05 (5% of the unit square)",
+            values={"median greedy distance": float(np.median(greedy))},
         )
     )
 
@@ -132,6 +134,8 @@ def reach2(ctx: Context) -> Section:
             f"{fmt(np.median(jumps))} action units (random choice: {fmt(random_jump)}).",
             bool(np.median(te) <= 0.1 and np.median(nn) >= 0.9 and np.median(jumps) <= 2.0),
             "topographic error <= 0.1, nearest-is-neighbour >= 0.9, mean jump <= 2 units",
+            values={"topographic error": float(np.median(te)), "nearest is neighbour": float(np.median(nn)),
+                    "mean jump": float(np.median(jumps))},
         )
     )
 
@@ -154,7 +158,7 @@ def reach2(ctx: Context) -> Section:
         title=f"Fig. 9: input map (trial {i}), shaded by greedy action unit",
     )
     ax.legend(loc="upper right")
-    section.figures.append(plots.save(fig, ctx.path("fig09_reach2_input_map.png")))
+    section.figures.append(ctx.save(fig, "fig09_reach2_input_map.png"))
 
     fig, ax = plt.subplots(figsize=(5.2, 5))
     plots.draw_action_map(
@@ -165,7 +169,7 @@ def reach2(ctx: Context) -> Section:
         labels=("theta1 (normalised from [-pi, pi])", "theta2 (normalised)"),
     )
     ax.set(aspect="equal", title=f"Fig. 10: action map (trial {i}), shaded by unit index")
-    section.figures.append(plots.save(fig, ctx.path("fig10_reach2_action_map.png")))
+    section.figures.append(ctx.save(fig, "fig10_reach2_action_map.png"))
     return section
 
 
@@ -218,6 +222,7 @@ def reach20(ctx: Context) -> Section:
             f"sweep's goals {fmt(greedy.mean())}.",
             bool(np.median(ratios) <= 0.25 and np.median(rhos) >= 0.5),
             "ratio <= 0.25 and Spearman >= 0.5",
+            values={"posture ratio": float(np.median(ratios)), "Spearman": float(np.median(rhos))},
         )
     )
 
@@ -240,7 +245,7 @@ def reach20(ctx: Context) -> Section:
         ylabel="y",
         title=f"Fig. 11: greedy postures of the 20-link arm (trial {i})",
     )
-    section.figures.append(plots.save(fig, ctx.path("fig11_reach20_postures.png")))
+    section.figures.append(ctx.save(fig, "fig11_reach20_postures.png"))
     return section
 
 
@@ -279,11 +284,12 @@ def four_goals(ctx: Context) -> Section:
     steps = runs["somq"].steps
     phases = {"before": (steps <= early), "after": (steps > switch) & (steps <= switch + early)}
     whole = {"before": steps <= switch, "after": steps > switch}
-    measured, holds = [], True
+    measured, holds, early_errors = [], True, {}
     for phase in ("before", "after"):
         e = {k: -r.block_means[phases[phase]].mean() for k, r in runs.items()}
         w = {k: -r.block_means[whole[phase]].mean() for k, r in runs.items()}
         holds &= bool(e["somq"] < e["motoric"])
+        early_errors.update({f"SOM-Q {phase}": float(e["somq"]), f"Motoric Map {phase}": float(e["motoric"])})
         measured.append(
             f"{phase} the change: early error SOM-Q {fmt(e['somq'])} vs Motoric Map "
             f"{fmt(e['motoric'])} (whole phase {fmt(w['somq'])} vs {fmt(w['motoric'])})"
@@ -294,6 +300,7 @@ def four_goals(ctx: Context) -> Section:
             "; ".join(measured) + ".",
             holds,
             "SOM-Q's early error lower in both phases",
+            values=early_errors,
         )
     )
 
@@ -312,7 +319,7 @@ def four_goals(ctx: Context) -> Section:
     )
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right")
-    section.figures.append(plots.save(fig, ctx.path("fig13_four_goals.png")))
+    section.figures.append(ctx.save(fig, "fig13_four_goals.png"))
 
     somq = runs["somq"]
     snap = somq.snapshots.get(switch)
@@ -336,7 +343,7 @@ def four_goals(ctx: Context) -> Section:
             xlim=(0, 1), ylim=(0, 1), aspect="equal", title=f"Fig. 14: input map at t = {switch} (trial {i})"
         )
         ax.legend(loc="upper right", fontsize=8)
-        section.figures.append(plots.save(fig, ctx.path("fig14_four_goals_input_map.png")))
+        section.figures.append(ctx.save(fig, "fig14_four_goals_input_map.png"))
         fig, ax = plt.subplots(figsize=(5.2, 5))
         plots.draw_action_map(
             ax,
@@ -346,5 +353,5 @@ def four_goals(ctx: Context) -> Section:
             labels=("theta1 (normalised)", "theta2 (normalised)"),
         )
         ax.set(aspect="equal", title=f"Fig. 15: action map at t = {switch} (trial {i})")
-        section.figures.append(plots.save(fig, ctx.path("fig15_four_goals_action_map.png")))
+        section.figures.append(ctx.save(fig, "fig15_four_goals_action_map.png"))
     return section

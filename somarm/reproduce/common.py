@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from somarm import plots
 from somarm.run import RunConfig, RunResult, final_rewards, train_group
 
 __all__ = [
@@ -26,12 +28,19 @@ class Context:
     """Where and how an experiment runs.
 
     ``quick`` uses reduced trial counts and run lengths (a smoke test: verdicts are indicative only).
+    With several ``seeds`` the experiment runs once per seed; its first training call trains every
+    seed's configurations in one lockstep group and keeps the other seeds' results in ``trained``
+    for their turn. Only the first seed draws figures.
     """
 
     out_dir: Path
     quick: bool = False
     seed: int = 0
     progress: bool = True
+    backend: str = "mujoco"  #: where every reward is computed: "mujoco" or "analytic"
+    seeds: tuple[int, ...] = ()  #: every seed of the run (empty: just ``seed``)
+    figures: bool = True  #: draw and write the figures (the first seed does)
+    trained: dict = field(default_factory=dict, compare=False, repr=False)
 
     def pick(self, full, quick):
         """The paper-scale value, or the reduced one in quick mode."""
@@ -40,25 +49,54 @@ class Context:
     def path(self, name: str) -> Path:
         return self.out_dir / "figures" / name
 
+    def save(self, fig, name: str) -> Path:
+        """Write a figure to ``figures/name`` (only closed, not drawn, when this seed draws none)."""
+        if not self.figures:
+            plots.plt.close(fig)
+            return self.path(name)
+        return plots.save(fig, self.path(name))
+
 
 def run(ctx: Context, label: str, config: RunConfig, *, snapshots_at: tuple[int, ...] = ()) -> RunResult:
-    """Train one configuration (every evaluation through the task's default MuJoCo backend)."""
+    """Train one configuration (every evaluation through ``ctx.backend``)."""
     return run_group(ctx, label, [config], snapshots_at=snapshots_at)[0]
 
 
 def run_group(
     ctx: Context, label: str, configs: list[RunConfig], *, snapshots_at: tuple[int, ...] = ()
 ) -> list[RunResult]:
-    """Train configurations that share a task in lockstep: one physics call per step for all.
+    """Train configurations in lockstep (one physics call per step for all) at this context's seed.
+
+    With several ``ctx.seeds``, the first call for ``label`` trains the configurations at every
+    seed in one group; the other seeds' results wait in ``ctx.trained``. Each result equals a
+    run of its configuration alone.
 
     Raises:
       KeyboardInterrupt: the training was stopped (Ctrl-C or SIGTERM stop it between steps); an
         experiment must not go on to draw conclusions from a partial run, so the reproduction stops.
     """
-    results = train_group(configs, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
-    if any(result.interrupted for result in results):
-        raise KeyboardInterrupt
-    return results
+    if (label, ctx.seed) not in ctx.trained:
+        seeds = ctx.seeds or (ctx.seed,)
+        group = [dataclasses.replace(c, seed=s, backend=_backend(c.task, ctx.backend)) for s in seeds for c in configs]
+        results = train_group(group, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+        if any(result.interrupted for result in results):
+            raise KeyboardInterrupt
+        for i, s in enumerate(seeds):
+            ctx.trained[(label, s)] = results[i * len(configs):(i + 1) * len(configs)]
+    return ctx.trained.pop((label, ctx.seed))
+
+
+def _backend(task: str, backend: str) -> str:
+    """``backend`` where the task has it; MuJoCo for a task without closed forms (reach2_obstacle)."""
+    from somarm import tasks
+
+    if backend == "mujoco":
+        return backend
+    try:
+        tasks.make(task, backend=backend)
+    except ValueError:
+        return "mujoco"
+    return backend
 
 
 def preset_choices(*names: str) -> list[str]:

@@ -97,18 +97,21 @@ def delayed_reward(ctx: Context) -> Section:
     claims = [
         Claim("Delayed reward: SOM-Q with gamma 0.9 learns to go around the wall to the goal (this project's "
               "target, not the paper's).", measured_09, rate[0] >= 0.9,
-              ">= 90% of greedy episodes from the task's start distribution reach the goal"),
+              ">= 90% of greedy episodes from the task's start distribution reach the goal",
+              values={"success gamma 0.9": rate[0]}),
         Claim("Without delayed reward (gamma 0) SOM-Q follows the next reward into the wall and reaches the goal "
               "clearly less often.",
               f"gamma 0: {fmt(100 * rate[1], 3)}% (gamma 0.9: {fmt(100 * rate[0], 3)}%); random target changes: "
               f"{fmt(100 * random_rate, 3)}%; the distance-greedy policy: "
               f"{fmt(100 * float(greedy_distance['success'].mean()), 3)}%",
-              rate[1] <= rate[0] - 0.5, "gamma 0 at least 50 points below gamma 0.9"),
+              rate[1] <= rate[0] - 0.5, "gamma 0 at least 50 points below gamma 0.9",
+              values={"success gamma 0": rate[1], "success gamma 0.9": rate[0]}),
         Claim("Greedy episodes with gamma 0.9 are close to the shortest path.",
               f"mean {fmt(length[0], 3)} steps against a shortest path of {fmt(best, 3)} steps "
               f"(breadth-first search over the nine corner/edge/null moves, {len(shortest_steps)} start(s)); "
               f"random target changes take {fmt(random_length, 3)} steps when they arrive",
-              bool(np.isfinite(length[0]) and length[0] <= 2 * best), "mean length <= 2 x the shortest path"),
+              bool(np.isfinite(length[0]) and length[0] <= 2 * best), "mean length <= 2 x the shortest path",
+              values={"mean length": length[0], "shortest path": best}),
     ]
     notes = [
         "The task: the actuated two-link arm starts right of a wall, the goal lies just left of it. Each step "

@@ -5,7 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Claim", "Section", "render"]
+import numpy as np
+
+__all__ = ["Claim", "Section", "merge_seeds", "render", "claim_record"]
 
 
 @dataclass
@@ -16,6 +18,28 @@ class Claim:
     measured: str  #: what was measured, with numbers
     holds: bool | None  #: True, False, or None where the measure does not decide
     test: str = ""  #: the stated test (bound, level) the verdict applies
+    values: dict[str, float] = field(default_factory=dict)  #: the numbers the test reads, by name
+    per_seed: list[tuple[int, Claim]] = field(default_factory=list)  #: (seed, claim) over seeds, if several
+
+    def verdict(self) -> str:
+        """"holds", "does not hold", "undecided", or over several seeds "holds in k of N seeds"."""
+        if not self.per_seed:
+            return _verdict(self.holds)
+        held = sum(c.holds is True for _, c in self.per_seed)
+        undecided = sum(c.holds is None for _, c in self.per_seed)
+        return f"holds in {held} of {len(self.per_seed)} seeds" + (f" ({undecided} undecided)" if undecided else "")
+
+    def spread(self) -> str:
+        """Every seed's numbers and their range, one phrase per number (empty for one seed)."""
+        if not self.per_seed:
+            return ""
+        phrases = []
+        for name in self.per_seed[0][1].values:
+            numbers = np.array([c.values.get(name, np.nan) for _, c in self.per_seed], dtype=float)
+            listed = ", ".join(_number(v) for v in numbers)
+            phrases.append(f"{name}: {listed} (range {_number(np.nanmin(numbers))} to {_number(np.nanmax(numbers))}, "
+                           f"sd {_number(np.nanstd(numbers))})")
+        return "; ".join(phrases)
 
 
 @dataclass
@@ -35,6 +59,56 @@ def _verdict(holds: bool | None) -> str:
     return {True: "holds", False: "does not hold", None: "undecided"}[holds]
 
 
+def _number(x: float) -> str:
+    if not np.isfinite(x):
+        return "never" if np.isnan(x) else str(x)
+    return f"{x:.3g}" if abs(x) < 1e-3 or abs(x) >= 1e4 else f"{x:.3f}".rstrip("0").rstrip(".")
+
+
+def merge_seeds(sections: list[Section], seeds: list[int]) -> Section:
+    """One section from the same experiment at several seeds: the first seed's figures, notes and
+    choices; each claim with every seed's verdict and numbers. A merged claim holds when every
+    seed's does, does not when none does and none is undecided, and is undecided otherwise.
+
+    Raises:
+      ValueError: the seeds' sections do not list the same claims.
+    """
+    first = sections[0]
+    if any([c.claim for c in s.claims] != [c.claim for c in first.claims] for s in sections):
+        raise ValueError(f"{first.name}: the seeds' reports list different claims")
+    claims = []
+    for i, claim in enumerate(first.claims):
+        per_seed = [(seed, s.claims[i]) for seed, s in zip(seeds, sections, strict=True)]
+        verdicts = [c.holds for _, c in per_seed]
+        holds = True if all(v is True for v in verdicts) else (False if all(v is False for v in verdicts) else None)
+        claims.append(Claim(claim.claim, f"seed {seeds[0]}: {claim.measured}", holds, claim.test,
+                            dict(claim.values), per_seed))
+    return Section(first.name, first.title, first.figures, claims, first.notes, first.choices)
+
+
+def claim_record(c: Claim) -> dict:
+    """A claim as claims.json holds it (with ``per_seed`` and ``holds_in`` over several seeds)."""
+    record = {"claim": c.claim, "measured": c.measured, "test": c.test, "holds": c.holds,
+              "values": {k: _json_number(v) for k, v in c.values.items()}}
+    if c.per_seed:
+        record["holds_in"] = sum(x.holds is True for _, x in c.per_seed)
+        record["seeds"] = len(c.per_seed)
+        record["per_seed"] = [{"seed": seed, "holds": x.holds, "measured": x.measured,
+                               "values": {k: _json_number(v) for k, v in x.values.items()}}
+                              for seed, x in c.per_seed]
+        record["spread"] = {name: {"min": _json_number(np.nanmin(v)), "max": _json_number(np.nanmax(v)),
+                                   "sd": _json_number(np.nanstd(v))}
+                            for name in c.values
+                            for v in [np.array([x.values.get(name, np.nan) for _, x in c.per_seed], dtype=float)]}
+    return record
+
+
+def _json_number(x) -> float | None:
+    """JSON has no NaN or infinity: those are written as null."""
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
 def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
     """The whole REPORT.md: header, the claims table, then one part per experiment."""
     lines = [
@@ -49,7 +123,8 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
     ]
     for section in sections:
         for c in section.claims:
-            cells = [section.name, c.claim, c.measured, c.test, f"**{_verdict(c.holds)}**"]
+            measured = c.measured + (f" Over seeds: {c.spread()}." if c.spread() else "")
+            cells = [section.name, c.claim, measured, c.test, f"**{c.verdict()}**"]
             lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
     for section in sections:
         lines += [
@@ -61,7 +136,8 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
         ]
         for c in section.claims:
             lines.append(
-                f"- **{_verdict(c.holds)}**: {c.claim} Measured: {c.measured}"
+                f"- **{c.verdict()}**: {c.claim} Measured: {c.measured}"
+                + (f" Over seeds: {c.spread()}." if c.spread() else "")
                 + (f" Test: {c.test}" if c.test else "")
             )
         if section.notes:

@@ -14,7 +14,9 @@ from somarm.compare import peers_missing
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.reproduce import arms, beyond, delayed, peers, throws
 from somarm.reproduce.common import Context
-from somarm.reproduce.report import Section, render
+from somarm.reproduce.report import Section, claim_record, merge_seeds, render
+from somarm.tasks.base import BACKENDS
+from somarm.validation import check_int
 
 __all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
 
@@ -48,27 +50,43 @@ def check_names(only: list[str] | None) -> list[str]:
 
 
 def reproduce(
-    out: Path, *, quick: bool = False, only: list[str] | None = None, seed: int = 0, progress: bool = True
+    out: Path, *, quick: bool = False, only: list[str] | None = None, seed: int = 0, progress: bool = True,
+    seeds: int = 1, backend: str = "mujoco",
 ) -> int:
     """Run the chosen experiments and write ``out/REPORT.md``, ``out/claims.json`` and the figures.
+
+    Args:
+      seeds: run every experiment at the seeds ``seed .. seed + seeds - 1`` (independent trial
+        sets, trained in lockstep); each claim's verdict then reads "holds in k of N seeds".
+      backend: where every reward is computed, "mujoco" (default) or "analytic" (closed forms).
 
     Returns:
       0 when every experiment ran (whatever the verdicts), 130 when interrupted (the report then
       holds the experiments that finished).
 
     Raises:
-      ValueError: an unknown experiment name (the message lists the names).
+      ValueError: an unknown experiment name (the message lists the names), seeds < 1, or an
+        unknown backend.
     """
     names = check_names(only)
+    check_int("seeds", seeds)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
     (out / "figures").mkdir(parents=True, exist_ok=True)
-    ctx = Context(out_dir=out, quick=quick, seed=seed, progress=progress)
+    all_seeds = tuple(range(seed, seed + seeds))
+    settings = {"quick": quick, "seeds": list(all_seeds), "backend": backend}
     sections: list[Section] = []
     start = time.perf_counter()
     status = 0
     for name in names:
         began = time.perf_counter()
+        trained: dict = {}  # one lockstep training for all seeds, consumed seed by seed
         try:
-            section = {**EXPERIMENTS, **OPTIONAL}[name](ctx)
+            parts = [
+                {**EXPERIMENTS, **OPTIONAL}[name](Context(out_dir=out, quick=quick, seed=s, progress=progress, backend=backend,
+                                          seeds=all_seeds if seeds > 1 else (), figures=i == 0, trained=trained))
+                for i, s in enumerate(all_seeds)
+            ]
         except KeyboardInterrupt:
             print(
                 f"\ninterrupted during {name}; the report holds the experiments that finished",
@@ -77,18 +95,20 @@ def reproduce(
             status = 130
             break
         except ValueError as exc:  # a figure that cannot be written (a full disk): keep the report so far
-            _keep_report(out, sections, quick=quick, seed=seed, total=time.perf_counter() - start)
+            _keep_report(out, sections, total=time.perf_counter() - start, **settings)
             raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
                              "experiment(s) that finished") from None
+        section = parts[0] if seeds == 1 else merge_seeds(parts, list(all_seeds))
         section.wall_time_s = time.perf_counter() - began
         sections.append(section)
         print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
-        _write(out, sections, quick=quick, seed=seed, total=time.perf_counter() - start, complete=False)
+        _write(out, sections, total=time.perf_counter() - start, complete=False, **settings)
     total = time.perf_counter() - start
-    _write(out, sections, quick=quick, seed=seed, total=total, complete=status == 0)
+    _write(out, sections, total=total, complete=status == 0, **settings)
     held = sum(c.holds is True for s in sections for c in s.claims)
     claims = sum(len(s.claims) for s in sections)
-    print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold; {total:.1f} s)")
+    over = f" in every one of {seeds} seeds" if seeds > 1 else ""
+    print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold{over}; {total:.1f} s)")
     return status
 
 
@@ -101,12 +121,19 @@ def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
 
 
 def _write(
-    out: Path, sections: list[Section], *, quick: bool, seed: int, total: float, complete: bool
+    out: Path, sections: list[Section], *, quick: bool, seeds: list[int], backend: str, total: float,
+    complete: bool,
 ) -> None:
     slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
+    where = ("every reward evaluated in MuJoCo (the tasks' default backend)" if backend == "mujoco" else
+             "every reward from the closed forms (backend `analytic`, a quick look; the default is MuJoCo; a "
+             "task without closed forms, reach2_obstacle, stays in MuJoCo)")
+    seed_text = (f"seed {seeds[0]}" if len(seeds) == 1 else
+                 f"{len(seeds)} seeds ({seeds[0]} to {seeds[-1]}: independent trial sets; figures from seed "
+                 f"{seeds[0]}; each verdict says in how many seeds the claim holds)")
     header = [
         f"Mode: **{'quick (reduced trial counts: verdicts are indicative only)' if quick else 'full'}**; "
-        f"seed {seed}; every reward evaluated in MuJoCo (the tasks' default backend); somarm {__version__}, "
+        f"{seed_text}; {where}; somarm {__version__}, "
         f"Python {platform.python_version()}, {platform.machine()}.",
         "",
         f"Total wall time {total:.1f} s"
@@ -122,17 +149,13 @@ def _write(
         out / "claims.json",
         {
             "quick": quick,
-            "seed": seed,
+            "seed": seeds[0],
+            "seeds": seeds,
+            "backend": backend,
             "complete": complete,
             "wall_time_s": round(total, 2),
             "experiments": {
-                s.name: {
-                    "wall_time_s": round(s.wall_time_s, 2),
-                    "claims": [
-                        {"claim": c.claim, "measured": c.measured, "test": c.test, "holds": c.holds}
-                        for c in s.claims
-                    ],
-                }
+                s.name: {"wall_time_s": round(s.wall_time_s, 2), "claims": [claim_record(c) for c in s.claims]}
                 for s in sections
             },
         },

@@ -27,11 +27,11 @@ def _curve(n: int = 2001, *, X: float = TARGET_X, **env) -> np.ndarray:
     return np.column_stack([ux, np.where(np.isfinite(ux), uy, np.nan)])
 
 
-def _landing_mujoco(ux: np.ndarray, uy: np.ndarray, **env) -> np.ndarray:
-    """Landing x of throws simulated in MuJoCo (the tasks' default backend)."""
+def _landing(ux: np.ndarray, uy: np.ndarray, *, backend: str, **env) -> np.ndarray:
+    """Landing x of throws, simulated in MuJoCo (the tasks' default backend) or from Eq. 7."""
     from somarm.tasks import throw as throw_task
 
-    return throw_task.landing_x(ux, uy, params=throw_task.ThrowParams(**{**TABLE3, **env}))
+    return throw_task.landing_x(ux, uy, params=throw_task.ThrowParams(**{**TABLE3, **env}), backend=backend)
 
 
 def throw(ctx: Context) -> Section:
@@ -65,6 +65,7 @@ def throw(ctx: Context) -> Section:
             f"within 0.02; the units span a median {100 * np.median(coverage):.0f}% of the curve's u_y range.",
             bool(on_curve >= 0.8 and np.median(coverage) >= 0.5),
             ">= 80% of units within 0.02, span >= 50%",
+            values={"units within 0.02": float(on_curve), "median span": float(np.median(coverage))},
         )
     )
     spans = {
@@ -99,6 +100,7 @@ def throw(ctx: Context) -> Section:
             avoided_verdict,
             "low-end gap > 0.02 and larger than the high-end gap in >= 75% of trials "
             "(undecided when only the first holds)",
+            values={"low-end gap > 0.02": float(low_avoided), "low end the larger gap": float(low_more)},
         )
     )
 
@@ -117,6 +119,7 @@ def throw(ctx: Context) -> Section:
             f"end {fmt(high_end)} (ratio {fmt(low_end / high_end)}).",
             bool(low_end > high_end),
             "low-end gradient > high-end gradient",
+            values={"gradient ratio": float(low_end / high_end)},
         )
     )
 
@@ -133,7 +136,7 @@ def throw(ctx: Context) -> Section:
         title="Fig. 16: two trajectories to X = 4 (simulated in MuJoCo)",
     )
     ax.legend()
-    section.figures.append(plots.save(fig, ctx.path("fig16_throw_trajectories.png")))
+    section.figures.append(ctx.save(fig, "fig16_throw_trajectories.png"))
 
     fig, ax = plt.subplots(figsize=(5.2, 5))
     ax.plot(curve[:, 0], curve[:, 1], "k-", lw=1, label="Eq. 8 solution curve")
@@ -152,7 +155,7 @@ def throw(ctx: Context) -> Section:
         title=f"Figs. 17-18: action map after 4000 throws (trial {i})",
     )
     ax.legend(loc="upper right")
-    section.figures.append(plots.save(fig, ctx.path("fig17_throw_action_map.png")))
+    section.figures.append(ctx.save(fig, "fig17_throw_action_map.png"))
 
     for name, values, label, title in (
         ("fig19_landing.png", landing, "landing position s_x", "Fig. 19: landing position"),
@@ -164,15 +167,15 @@ def throw(ctx: Context) -> Section:
         ax.plot(curve[:, 0], curve[:, 1], "w-", lw=2, label="lands at X = 4")
         ax.set(xlabel="horizontal speed u_x", ylabel="vertical speed u_y", aspect="equal", title=title)
         ax.legend(loc="upper right")
-        section.figures.append(plots.save(fig, ctx.path(name)))
+        section.figures.append(ctx.save(fig, name))
     return section
 
 
-def _greedy_landing(learner, trial: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _greedy_landing(learner, trial: int, backend: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per input unit of a 1-D throw_distance map: target it serves, its greedy action, landing x."""
     targets = learner.input_weights[trial, :, 0]
     actions = learner.action_weights[trial][learner.q[trial].argmax(axis=1)]
-    return targets, actions, _landing_mujoco(actions[:, 0], actions[:, 1])
+    return targets, actions, _landing(actions[:, 0], actions[:, 1], backend=backend)
 
 
 def throw_maps(ctx: Context) -> Section:
@@ -210,7 +213,7 @@ def throw_maps(ctx: Context) -> Section:
         )
         cvs, errs = [], []
         for i in range(n_trials):
-            targets, actions, landed = _greedy_landing(learner, i)
+            targets, actions, landed = _greedy_landing(learner, i, ctx.backend)
             order = np.argsort(targets)
             cvs.append(metrics.spacing_cv(targets[order][1:-1]))
             errs.append(np.abs(landed - targets).mean())
@@ -250,7 +253,7 @@ def throw_maps(ctx: Context) -> Section:
             ax.set_title(f"landing of each unit's greedy throw (mean miss {errs[-1]:.3f})", fontsize=9)
             ax.legend(fontsize=7, loc="upper left")
         fig.suptitle(f"Fig. {fig_no}: throw_distance, action neighbourhood N_A = {n_a} x f(throw)")
-        section.figures.append(plots.save(fig, ctx.path(f"fig{fig_no}_throw_maps_na{n_a}.png")))
+        section.figures.append(ctx.save(fig, f"fig{fig_no}_throw_maps_na{n_a}.png"))
         spacing[n_a], landing_err[n_a] = np.array(cvs), np.array(errs)
         n_distinct[n_a] = np.array([len(np.unique(learner.q[i].argmax(axis=1))) for i in range(n_trials)])
     all_cv = np.concatenate(list(spacing.values()))
@@ -261,6 +264,7 @@ def throw_maps(ctx: Context) -> Section:
             f"{len(all_cv)} trials.",
             bool(np.median(all_cv) <= 0.3),
             "median CV <= 0.3",
+            values={"median CV": float(np.median(all_cv))},
         )
     )
     all_err = np.concatenate(list(landing_err.values()))
@@ -273,6 +277,7 @@ def throw_maps(ctx: Context) -> Section:
             "neighbouring targets share a throw (the staircases of the right-hand plots).",
             bool(np.median(all_err) <= 0.25),
             "median <= 0.25",
+            values={"median miss": float(np.median(all_err))},
         )
     )
     means = {k: float(v.mean()) for k, v in finals.items()}
@@ -285,6 +290,7 @@ def throw_maps(ctx: Context) -> Section:
             + f"; largest / smallest {fmt(spread)}.",
             bool(spread <= 1.5),
             "ratio <= 1.5",
+            values={"largest / smallest": float(spread)},
         )
     )
     return section
@@ -365,6 +371,7 @@ def neighbourhood_q(ctx: Context) -> Section:
             f"(5-95% over resampled trials: {fmt(low, 2)} to {fmt(high, 2)}).",
             verdict,
             "factor >= 6 (undecided when 6 lies within the 5-95% range)",
+            values={"factor": float(factor)},
         )
     )
     section.claims.append(
@@ -374,6 +381,7 @@ def neighbourhood_q(ctx: Context) -> Section:
             f"(ratio {fmt(finals['-NL/0.9997'] / finals['+NL/0.9985'], 2)}).",
             bool(finals["-NL/0.9997"] <= 1.25 * finals["+NL/0.9985"]),
             "within 25%",
+            values={"ratio": finals["-NL/0.9997"] / finals["+NL/0.9985"]},
         )
     )
     section.claims.append(
@@ -382,6 +390,7 @@ def neighbourhood_q(ctx: Context) -> Section:
             "final error " + ", ".join(f"{k}: {fmt(v)}" for k, v in finals.items()) + ".",
             bool(finals["-NL/0.9985"] > 1.5 * finals["+NL/0.9985"]),
             "-NL/0.9985 > 1.5 x +NL/0.9985",
+            values={**finals, "ratio": finals["-NL/0.9985"] / finals["+NL/0.9985"]},
         )
     )
 
@@ -401,7 +410,7 @@ def neighbourhood_q(ctx: Context) -> Section:
     for c, colour in ((0.9985, "C0"), (0.9997, "C2")):
         twin.plot(steps, c**steps, ls=":", color=colour)
     twin.set(ylabel=r"schedules $0.9985^{throw}$, $0.9997^{throw}$ (dotted)", ylim=(0, 1.05))
-    section.figures.append(plots.save(fig, ctx.path("fig24_neighbourhood_q.png")))
+    section.figures.append(ctx.save(fig, "fig24_neighbourhood_q.png"))
     return section
 
 
@@ -414,9 +423,8 @@ def more_inputs(ctx: Context) -> Section:
         "C": ("throw_friction", "table7"),
         "D": ("throw_mass", "table7"),
     }
-    results = {}
-    for label, (task, preset) in experiments.items():
-        config = RunConfig(
+    configs = [
+        RunConfig(
             task=task,
             preset=preset,
             n_trials=n_trials,
@@ -424,7 +432,10 @@ def more_inputs(ctx: Context) -> Section:
             seed=ctx.seed,
             task_params={"punish_low": True},
         )
-        results[label] = run(ctx, f"Fig 25 {label} {task}", config)
+        for task, preset in experiments.values()
+    ]
+    # In lockstep: the four tasks' throws fly in one batch per step (results equal separate runs).
+    results = dict(zip(experiments, run_group(ctx, "Fig 25 A-D", configs), strict=True))
     section = Section("more_inputs", "Fig. 25: more varied inputs, experiments A-D (Tables 6 and 7)")
     finals = {k: final_error(r, 100) for k, r in results.items()}
     mean = {k: float(v.mean()) for k, v in finals.items()}
@@ -454,6 +465,7 @@ def more_inputs(ctx: Context) -> Section:
             + ".",
             bool(monotone and mean["D"] > mean["A"]),
             "non-decreasing within 10%, D > A",
+            values=dict(mean),
         )
     )
     section.claims.append(
@@ -464,6 +476,7 @@ def more_inputs(ctx: Context) -> Section:
             + f"; D / random = {fmt(mean['D'] / random_error['D'])}.",
             bool(mean["D"] <= random_error["D"] / 3),
             "D <= random / 3",
+            values={"D / random": mean["D"] / random_error["D"]},
         )
     )
 
@@ -498,5 +511,5 @@ def more_inputs(ctx: Context) -> Section:
     right.set(xlabel="throw", ylabel="error", title="Fig. 25 (right): spread of the data for A and C")
     right.grid(alpha=0.3)
     right.legend()
-    section.figures.append(plots.save(fig, ctx.path("fig25_more_inputs.png")))
+    section.figures.append(ctx.save(fig, "fig25_more_inputs.png"))
     return section

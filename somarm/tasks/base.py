@@ -18,7 +18,7 @@ from dm_env import specs
 from somarm.streams import UniformStreams, trial_ids_for
 from somarm.validation import real_array
 
-__all__ = ["Backend", "BACKENDS", "OneStepTask", "OneStepEnvTask", "check_actions"]
+__all__ = ["Backend", "BACKENDS", "OneStepTask", "OneStepEnvTask", "check_actions", "step_together"]
 
 Backend = Literal["mujoco", "analytic"]
 BACKENDS: tuple[str, ...] = ("mujoco", "analytic")
@@ -123,15 +123,35 @@ class OneStepTask:
         Raises:
           ValueError: no ``reset`` before, or actions of the wrong shape, non-finite or out of bounds.
         """
+        observations, actions = self.begin_step(actions)
+        rewards = self.rewards(observations, actions)
+        self.end_step()
+        return rewards
+
+    def begin_step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The checked ``(observations, actions)`` of the step about to be taken (``step`` is
+        ``begin_step``, ``rewards``, ``end_step``; ``step_together`` pools the middle part).
+
+        Raises:
+          ValueError: as ``step``.
+        """
         if self._observations is None:
             raise ValueError(f"{self.name}: call reset() before step()")
         actions = check_actions("actions", actions, self.action_low, self.action_high)
         if actions.shape != (self.n_trials, self.action_dim):
             raise ValueError(f"actions must have shape ({self.n_trials}, {self.action_dim}), got {actions.shape}")
-        rewards = self.rewards(self._observations, actions)
-        self._observations = None  # one step per episode
+        return self._observations, actions
+
+    def end_step(self) -> None:
+        """Close the episode ``begin_step`` opened: one step per episode."""
+        self._observations = None
         self.t += 1
-        return rewards
+
+    @classmethod
+    def rewards_together(cls, tasks: list[OneStepTask], steps: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+        """Rewards of several tasks of this class for their ``(observations, actions)``; a task
+        class whose physics can take them in one call overrides this (throws do)."""
+        return [task.rewards(o, a) for task, (o, a) in zip(tasks, steps, strict=True)]
 
     def evaluate(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
         """Rewards ``(...)`` for ``(..., obs_dim)`` observations and ``(..., action_dim)`` actions.
@@ -157,6 +177,31 @@ class OneStepTask:
     def sample_observations(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` fresh observations ``(n, obs_dim)`` drawn with ``rng``."""
         return self.observations_from(rng.random((int(n), self.uniform_width)))
+
+
+def step_together(tasks: list[OneStepTask], actions: list[np.ndarray]) -> list[np.ndarray]:
+    """One step of every task, as each task's own ``step`` gives it, in one physics call where they allow.
+
+    Tasks of one class share the call their class's ``rewards_together`` makes (several throw
+    tasks: one batch of flights); a throw lands at the same x in any batch, so the rewards equal
+    those of separate steps.
+
+    Args:
+      tasks: the tasks, each reset. actions: each task's actions ``(n_trials_i, action_dim_i)``.
+
+    Returns:
+      Each task's rewards ``(n_trials_i,)``, in order.
+    """
+    kind = type(tasks[0])
+    pooled = (len(tasks) > 1 and all(type(task) is kind for task in tasks) and issubclass(kind, OneStepTask)
+              and kind.step is OneStepTask.step)  # a task with its own step (multi-step episodes) steps alone
+    if not pooled:
+        return [task.step(a) for task, a in zip(tasks, actions, strict=True)]
+    steps = [task.begin_step(a) for task, a in zip(tasks, actions, strict=True)]
+    rewards = kind.rewards_together(tasks, steps)
+    for task in tasks:
+        task.end_step()
+    return rewards
 
 
 class OneStepEnvTask(base.Task):

@@ -15,13 +15,22 @@ Eq. 7 by ``u0 (exp(-kT) - R^N) / k``; to leading order that is at most
 ``|u0| k^3 h^4 / (120 e)``, and the Hermite interpolation adds at most ``|u0| k^3 h^4 / 384``.
 ``step_for`` picks the largest step of a fixed ladder whose bound stays under the tolerance:
 drag-free throws take the largest step, the strongest drag and wind of Table 6 0.25. The
-bound is the leading term in k h, good while k h stays small (k h <= 0.2 in Table 6). A throw's
-step depends only on its own velocity and parameters, never on the rest of the batch, so a
-throw lands at the same x alone or in any batch.
+bound is the leading term in k h, good while k h stays small (k h <= 0.2 in Table 6).
 
-Large batches are sorted by step and u_y (the flight time grows with it), cut into chunks of similar
-flights, and the chunks shared between threads, each with its own model copy: a chunk stops
-when its longest flight lands, and MuJoCo releases the GIL while it steps.
+Throws of different steps share one model through a change of time scale: a throw whose step
+is ``c`` is simulated in the time ``s = t / c`` with the model's step ``SCALED_STEP = 1``, its
+height divided by ``c^2`` (so gravity stays the model's) and its drag rate multiplied by ``c``
+(damping ``c Fr / M`` on a unit mass, force ``-c Fr W / M``; the launch velocity is
+``(u_x, u_y / c)``). RK4 commutes with that linear change of variables, so each throw gets
+exactly its own step's accuracy; its landing is ``c`` times the scaled x. A throw's step and
+scaling depend only on the throw itself, and projectiles in one model do not interact, so a
+throw lands at the same x alone, in any batch, and in the dm_env launcher.
+
+A batch is sorted by flight length (in model steps) and cut into chunks whose cost, steps times
+(a fixed cost per step plus one per projectile), is small: small batches in a few chunks of
+similar flights, large ones in chunks of ``chunk`` throws. Each chunk is one native
+``mujoco.rollout`` call (no Python per step); chunks are shared between threads, each with
+its own model copies, and MuJoCo releases the GIL while it steps.
 """
 
 from __future__ import annotations
@@ -31,12 +40,13 @@ import threading
 
 import mujoco
 import numpy as np
+from mujoco import rollout as mj_rollout
 
 from somarm.tasks.assets import model_path
 from somarm.tasks.pool import shared_pool
 
-__all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "error_bound", "step_for", "fly", "max_steps_for",
-           "ProjectileBatch", "landing_x"]
+__all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "SCALED_STEP", "error_bound", "step_for", "fly",
+           "max_steps_for", "ProjectileBatch", "landing_x"]
 
 #: This project's bound on the landing error of one throw, used to pick its RK4 step: half of
 #: 1e-6, and about twice what the largest errors measured over Table 6's box reach.
@@ -44,15 +54,25 @@ DEFAULT_TOLERANCE = 5e-7
 #: The steps a throw may use, largest first (round values, so that flight times of round u_y
 #: fall on whole steps, the case where interpolation error hides; the tests use random u_y).
 STEP_LADDER: tuple[float, ...] = (1.0, 0.8, 0.5, 0.4, 0.25, 0.2, 0.125, 0.1, 0.05, 0.025)
+#: The models' own step: a throw of step c runs in the time t / c (see the module docstring).
+SCALED_STEP = 1.0
 _BOUND_FACTOR = 1.0 / (120.0 * math.e) + 1.0 / 384.0
 _CHUNK = 256
+#: The fixed cost of one model step in projectile-steps (measured: about 7 us per RK4 step of a
+#: model, 0.7 us per projectile in it); it decides how finely a small batch is cut.
+_STEP_COST = 10.0
+#: Projectiles per model: a chunk runs in the smallest of these that holds it (few models built).
+_SIZES = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256)
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+_FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
 #: Threads for batches of more than one chunk (2 by default: a small machine); see ``tasks.set_threads``.
 THREADS = 2
 
 
 def error_bound(ux, W, k, step) -> np.ndarray:
     """Leading-order bound on the simulated landing error: ``|ux + W| k^3 h^4 (1/(120 e) + 1/384)``."""
-    return np.abs(np.asarray(ux) + W) * np.asarray(k) ** 3 * np.asarray(step) ** 4 * _BOUND_FACTOR
+    k = np.asarray(k)
+    return np.abs(np.asarray(ux) + W) * (k * k * k) * _BOUND_FACTOR * np.asarray(step) ** 4
 
 
 def step_for(ux, W, k, *, tolerance: float = DEFAULT_TOLERANCE) -> np.ndarray:
@@ -65,10 +85,15 @@ def step_for(ux, W, k, *, tolerance: float = DEFAULT_TOLERANCE) -> np.ndarray:
     Returns:
       Steps of the broadcast shape.
     """
+    if all(isinstance(a, float) for a in (ux, W, k)):  # one throw (the dm_env path): no arrays
+        base = abs(ux + W) * (k * k * k) * _BOUND_FACTOR
+        return np.float64(next((h for h in STEP_LADDER if base * h ** 4 <= tolerance), STEP_LADDER[-1]))
     ux, W, k = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, W, k)))
+    # The bound is base * h^4, so the largest admissible step is the first of the ladder that fits.
+    base = np.abs(ux + W) * (k * k * k) * _BOUND_FACTOR
     step = np.full(ux.shape, STEP_LADDER[-1])
     for h in reversed(STEP_LADDER[:-1]):
-        step = np.where(error_bound(ux, W, k, h) <= tolerance, h, step)
+        step = np.where(base * h ** 4 <= tolerance, h, step)
     return step
 
 
@@ -86,9 +111,26 @@ def _locate(z0, w0, x0, v0, x1, v1, *, gravity: float, dt: float) -> tuple[np.nd
     return x, s * dt
 
 
+def _landings(positions: np.ndarray, velocities: np.ndarray, x, z, *, gravity: float, dt: float):
+    """Landing x, step index after the landing and time into that step, from rows of states.
+
+    ``positions`` ``(rows, nq)`` and ``velocities`` ``(rows, nv)`` start at a state before any
+    landing; every projectile must be at or below 0 in the last row.
+    """
+    heights = positions[1:, z]
+    after = np.argmax(heights <= 0.0, axis=0) + 1  # first row at or below the ground, >= 1
+    cols = np.arange(heights.shape[1])
+    px, pz = positions[:, x], positions[:, z]
+    vx, vz = velocities[:, x], velocities[:, z]
+    before = after - 1
+    landing, tau = _locate(pz[before, cols], vz[before, cols], px[before, cols], vx[before, cols],
+                           px[after, cols], vx[after, cols], gravity=gravity, dt=dt)
+    return landing, after, tau
+
+
 def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z: slice | np.ndarray,
         max_steps: int, previous: tuple[np.ndarray, np.ndarray] | None = None,
-        history: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
+        history: bool = False, scale: float = 1.0) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step from the current state until every projectile is back at height 0.
 
     Args:
@@ -99,6 +141,8 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
         step itself); that step is checked for a landing like the others.
       history: (one projectile only) also return the times ``(T,)`` and qpos ``(T, nq)`` of
         the launch and of every step, the last row replaced by the located landing point.
+      scale: the flight's time scale c (its real step per model step): x, height and time
+        are returned as ``c x``, ``c^2 height`` and ``c t``.
 
     Returns:
       Landing x of every projectile, shape ``(n,)``; with ``history``, ``(landing, times, qpos)``.
@@ -109,6 +153,16 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
     gravity = -float(model.opt.gravity[2])
     dt = float(model.opt.timestep)
     qpos, qvel = data.qpos, data.qvel
+    if not history:
+        # Heights are exactly quadratic: no projectile lands before its analytic landing time,
+        # so step natively to two steps short of the earliest and record only from there.
+        rise = np.maximum(qvel[z], 0.0)
+        earliest = float(np.min((rise + np.sqrt(rise * rise + 2.0 * gravity * np.maximum(qpos[z], 0.0))) / gravity))
+        skip = min(int(earliest / dt) - 2, max_steps)
+        if skip > 0:
+            mujoco.mj_step(model, data, nstep=skip)
+            max_steps -= skip
+            previous = None
     positions = np.empty((max_steps + 2, model.nq))
     velocities = np.empty((max_steps + 2, model.nv))
     if previous is None:
@@ -126,24 +180,20 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
         mujoco.mj_step(model, data)
         row += 1
         positions[row], velocities[row] = qpos, qvel
-    heights = positions[1:row + 1, z]
-    after = np.argmax(heights <= 0.0, axis=0) + 1  # first row at or below the ground, >= 1
-    cols = np.arange(heights.shape[1])
-    px, pz = positions[:, x], positions[:, z]
-    vx, vz = velocities[:, x], velocities[:, z]
-    before = after - 1
-    landing, tau = _locate(pz[before, cols], vz[before, cols], px[before, cols], vx[before, cols],
-                           px[after, cols], vx[after, cols], gravity=gravity, dt=dt)
+    landing, after, tau = _landings(positions[:row + 1], velocities[:row + 1], x, z, gravity=gravity, dt=dt)
+    landing = landing * scale
     if not history:
         return landing
-    if heights.shape[1] != 1:
+    if len(landing) != 1:
         raise ValueError("history is for a single projectile")
     last = int(after[0])
     times = np.arange(last + 1) * dt
-    times[last] = before[0] * dt + tau[0]
+    times[last] = (last - 1) * dt + tau[0]
     path = positions[:last + 1].copy()
+    path[:, x] *= scale
+    path[:, z] *= scale * scale
     path[last, x], path[last, z] = landing, 0.0
-    return landing, times, path
+    return landing, times * scale, path
 
 
 def max_steps_for(uy_max: float, *, G: float, dt: float) -> int:
@@ -152,7 +202,9 @@ def max_steps_for(uy_max: float, *, G: float, dt: float) -> int:
 
 
 class ProjectileBatch:
-    """``n`` projectiles in one MuJoCo model, built from ``models/launcher.xml``'s options.
+    """``n`` projectiles of unit mass in one MuJoCo model, with ``models/launcher.xml``'s options.
+
+    The model's step is ``SCALED_STEP``; ``land`` gives each throw its own step by scaling.
 
     Args:
       n: projectiles in the model (a chunk of a larger batch).
@@ -161,14 +213,13 @@ class ProjectileBatch:
 
     def __init__(self, n: int, *, G: float):
         base = mujoco.MjModel.from_xml_path(str(model_path("launcher")))
-        body = base.body("projectile")
-        mass, inertia = float(body.mass[0]), " ".join(f"{v:.17g}" for v in body.inertia)
+        inertia = " ".join(f"{v:.17g}" for v in base.body("projectile").inertia)
         projectiles = "".join(
-            f'<body name="projectile{i}"><inertial pos="0 0 0" mass="{mass:.17g}" diaginertia="{inertia}"/>'
+            f'<body name="projectile{i}"><inertial pos="0 0 0" mass="1" diaginertia="{inertia}"/>'
             f'<joint name="x{i}" axis="1 0 0"/><joint name="height{i}" axis="0 0 1"/></body>'
             for i in range(n)
         )
-        xml = (f'<mujoco model="launcher_batch"><option gravity="0 0 {-G!r}"/>'
+        xml = (f'<mujoco model="launcher_batch"><option gravity="0 0 {-G!r}" timestep="{SCALED_STEP!r}"/>'
                f'<default><joint type="slide" limited="false"/></default>'
                f"<worldbody>{projectiles}</worldbody></mujoco>")
         self.model = mujoco.MjModel.from_xml_string(xml)
@@ -178,25 +229,36 @@ class ProjectileBatch:
         self.data = mujoco.MjData(self.model)
         self.n, self.G = n, float(G)
         self._x, self._z = slice(0, 2 * n, 2), slice(1, 2 * n, 2)
+        self._n_state = mujoco.mj_stateSize(self.model, _STATE)
+        self._qpos = slice(1, 1 + self.model.nq)  # a full-physics state is (time, qpos, qvel, ...)
+        self._qvel = slice(1 + self.model.nq, 1 + self.model.nq + self.model.nv)
 
-    def land(self, ux, uy, Fr, W, M, *, dt: float) -> np.ndarray:
-        """Landing x for up to ``n`` throws (1-D arrays of length ``m <= n``) with RK4 step ``dt``."""
+    def land(self, ux, uy, k, W, scale) -> np.ndarray:
+        """Landing x for up to ``n`` throws (1-D arrays of length ``m <= n``; ``k`` = Fr / M, ``scale`` each
+        throw's RK4 step), simulated in one native rollout."""
         m = len(ux)
-        model, data = self.model, self.data
-        mass = np.ones(self.n)
-        mass[:m] = M
-        if not np.array_equal(model.body_mass[1:], mass):
-            model.body_mass[1:] = mass
-            mujoco.mj_setConst(model, data)  # the cached diagonal mass must follow body_mass
-        mujoco.mj_resetData(model, data)
-        model.opt.timestep = dt
-        model.dof_damping[self._x] = 0.0
-        model.dof_damping[self._x][:m] = Fr
-        data.qfrc_applied[self._x][:m] = -np.asarray(Fr) * W
-        data.qvel[self._x][:m] = ux
-        data.qvel[self._z][:m] = uy  # unused slots stay at rest and land in the first step
-        steps = max_steps_for(float(np.max(uy, initial=0.0)), G=self.G, dt=dt)
-        return fly(model, data, x=self._x, z=self._z, max_steps=steps)[:m]
+        model = self.model
+        rate = np.asarray(scale) * k
+        damping = np.zeros(self.n)
+        damping[:m] = rate
+        model.dof_damping[self._x] = damping
+        force = np.zeros((1, 1, model.nv))
+        force[0, 0, self._x][:m] = -rate * W
+        launch = np.zeros((1, self._n_state))
+        velocity = launch[0, self._qvel]
+        velocity[self._x][:m] = ux
+        lift = np.asarray(uy) / scale
+        velocity[self._z][:m] = lift  # unused slots stay at rest and land in the first step
+        steps = max_steps_for(float(np.max(lift, initial=0.0)), G=self.G, dt=SCALED_STEP)
+        states = np.empty((1, steps + 1, self._n_state))
+        states[0, 0] = launch[0]
+        mj_rollout.rollout([model], [self.data], launch, np.broadcast_to(force, (1, steps, model.nv)).copy(),
+                           control_spec=_FORCE, nstep=steps, state=states[:, 1:], skip_checks=True)
+        positions, velocities = states[0, :, self._qpos], states[0, :, self._qvel]
+        if positions[-1, self._z][:m].max() > 0.0:
+            raise RuntimeError(f"projectile(s) still flying after {steps} steps")
+        landing, _, _ = _landings(positions, velocities, self._x, self._z, gravity=self.G, dt=SCALED_STEP)
+        return landing[:m] * scale
 
 
 _local = threading.local()
@@ -211,17 +273,39 @@ def _batch_for_thread(n: int, G: float) -> ProjectileBatch:
     return cache[(n, G)]
 
 
-def _model_size(m: int, largest: int) -> int:
-    """Projectiles in the model for a chunk of ``m``: a power of two, so that every projectile
-    stepped is (mostly) a real throw and only a few model sizes are ever built."""
-    return min(largest, max(8, 1 << (m - 1).bit_length()))
+def _model_size(m: int) -> int:
+    """Projectiles in the model for a chunk of ``m``: the smallest of ``_SIZES`` that holds it."""
+    for size in _SIZES:
+        if size >= m:
+            return size
+    return m
 
 
-def _run_chunks(chunks: list[np.ndarray], arrays, out: np.ndarray, G: float, size: int) -> None:
-    ux, uy, Fr, W, M, step = arrays
+def _partition(lengths: np.ndarray, size: int) -> list[tuple[int, int]]:
+    """Chunks ``(start, stop)`` of ascending flight lengths (in model steps), at most ``size`` each.
+
+    A chunk costs its longest flight's steps times (``_STEP_COST`` + its projectiles). From the
+    longest flights down, each chunk starts where it and the rest, counted as one more chunk,
+    cost least: a few chunks of similar flights for small batches, full chunks for large ones.
+    """
+    steps = np.ceil(lengths) + 2.0
+    bounds = []
+    stop = len(steps)
+    while stop > 0:
+        starts = np.arange(max(0, stop - size), stop)
+        rest = np.where(starts > 0, steps[starts - 1] * (_STEP_COST + starts), 0.0)
+        cost = steps[stop - 1] * (_STEP_COST + stop - starts) + rest
+        start = int(starts[np.argmin(cost)])
+        bounds.append((start, stop))
+        stop = start
+    return bounds[::-1]
+
+
+def _run_chunks(chunks: list[np.ndarray], arrays, out: np.ndarray, G: float) -> None:
+    ux, uy, k, W, scale = arrays
     for idx in chunks:
-        batch = _batch_for_thread(_model_size(len(idx), size), G)
-        out[idx] = batch.land(ux[idx], uy[idx], Fr[idx], W[idx], M[idx], dt=float(step[idx[0]]))
+        batch = _batch_for_thread(_model_size(len(idx)), G)
+        out[idx] = batch.land(ux[idx], uy[idx], k[idx], W[idx], scale[idx])
 
 
 def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float = DEFAULT_TOLERANCE,
@@ -233,33 +317,40 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
       G: gravity (a scalar for the whole batch). Fr, W, M: drag, wind and mass, per throw or scalar.
       tolerance: landing error bound that picks each throw's step (``step_for``).
       n_threads: threads for batches of more than one chunk (default ``THREADS``).
-      chunk: throws per model.
+      chunk: most throws per model.
 
     Returns:
       Landing x of shape ``(...)``.
     """
     arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, uy, Fr, W, M)))
     shape = arrays[0].shape
-    flat = [np.ascontiguousarray(a).ravel() for a in arrays]
-    total = flat[0].size
+    ux_, uy_, Fr_, W_, M_ = (np.ascontiguousarray(a).ravel() for a in arrays)
+    total = ux_.size
     out = np.empty(total)
     if total == 0:
         return out.reshape(shape)
-    size = min(chunk, total)
-    ux_, uy_, Fr_, W_, M_ = flat
-    step = step_for(ux_, W_, Fr_ / M_, tolerance=tolerance)
-    flat.append(step)
-    order = np.lexsort((uy_, step))  # one step per chunk; similar flight times share a chunk
-    bounds = np.flatnonzero(np.diff(step[order])) + 1
-    chunks = [group[i:i + size] for group in np.split(order, bounds) for i in range(0, len(group), size)]
+    k = Fr_ / M_
+    scale = step_for(ux_, W_, k, tolerance=tolerance)
+    lengths = 2.0 * (uy_ / scale) / (G * SCALED_STEP)  # flight in model steps
+    order = np.argsort(lengths, kind="stable")
+    bounds = _partition(lengths[order], max(1, chunk))
+    chunks = [order[a:b] for a, b in bounds]
+    flat = (ux_, uy_, k, W_, scale)
     workers = max(1, min(THREADS if n_threads is None else n_threads, len(chunks)))
     if workers == 1:
-        _run_chunks(chunks, flat, out, G, size)
-    else:
-        pool = shared_pool(workers)
-        # Interleave so that every thread gets short and long flights alike.
-        futures = [pool.submit(_run_chunks, chunks[w::workers], flat, out, G, size)
-                   for w in range(workers)]
-        for future in futures:
-            future.result()
+        _run_chunks(chunks, flat, out, G)
+        return out.reshape(shape)
+    # Longest work first, each chunk to the least loaded thread.
+    cost = [(math.ceil(lengths[order[b - 1]]) + 2) * (_STEP_COST + b - a) for a, b in bounds]
+    shares: list[list[np.ndarray]] = [[] for _ in range(workers)]
+    load = [0.0] * workers
+    for i in sorted(range(len(chunks)), key=lambda i: -cost[i]):
+        w = load.index(min(load))
+        shares[w].append(chunks[i])
+        load[w] += cost[i]
+    pool = shared_pool(workers)
+    futures = [pool.submit(_run_chunks, share, flat, out, G) for share in shares[1:]]
+    _run_chunks(shares[0], flat, out, G)  # the calling thread takes a share too
+    for future in futures:
+        future.result()
     return out.reshape(shape)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
@@ -16,46 +15,71 @@ class LauncherPhysics(dm_mujoco.Physics):
     """dm_control physics of ``models/launcher.xml`` with noun accessors."""
 
     def _dofs(self) -> tuple[np.ndarray, np.ndarray]:
-        model = self.model
-        return (np.array([model.jnt_dofadr[model.name2id("x", "joint")]]),
-                np.array([model.jnt_dofadr[model.name2id("height", "joint")]]))
+        """dof addresses of the slide joints ``x`` and ``height``, each of shape ``(1,)``."""
+        cached = getattr(self, "_dof_cache", None)
+        if cached is None or cached[0] is not self.model.ptr:
+            model = self.model
+            cached = self._dof_cache = (model.ptr, np.array([model.jnt_dofadr[model.name2id("x", "joint")]]),
+                                        np.array([model.jnt_dofadr[model.name2id("height", "joint")]]))
+        return cached[1], cached[2]
 
     def set_conditions(self, *, Fr: float, W: float, M: float) -> None:
-        """Drag Fr (joint damping and the wind motor's gear), wind W (its control) and mass M."""
-        self.named.model.dof_damping["x"] = Fr
-        self.named.model.actuator_gear["wind", 0] = -Fr
+        """Drag Fr, wind W (the wind motor's control) and mass M of the next launch.
+
+        The projectile keeps unit mass: M enters only through the drag rate Fr / M (gravity's
+        acceleration does not depend on it), as in the batched flights. ``launch`` turns that
+        rate, times its step, into the joint damping and the wind motor's gear.
+        """
+        self._rate = Fr / M
         self.named.data.ctrl["wind"] = W
-        if self.named.model.body_mass["projectile"] != M:
-            self.named.model.body_mass["projectile"] = M
-            mujoco.mj_setConst(self.model.ptr, self.data.ptr)  # the cached mass must follow
 
     def set_target(self, X: float) -> None:
         self.named.data.mocap_pos["target", 0] = X
 
     def launch(self, ux: float, uy: float, *, step: float) -> tuple[np.ndarray, np.ndarray]:
-        """Put the projectile at the origin with velocity (ux, uy); returns the launch (qpos, qvel)."""
-        self.model.opt.timestep = step
-        self.data.time = 0.0
-        self.data.qpos[:] = 0.0
-        self.data.qvel[:] = 0.0
-        self.named.data.qvel["x"] = ux
-        self.named.data.qvel["height"] = uy
-        return self.data.qpos.copy(), self.data.qvel.copy()
+        """Put the projectile at the origin with velocity (ux, uy), to fly with RK4 step ``step``.
+
+        The flight runs in the model's scaled time (``flight`` module docstring): model step
+        ``flight.SCALED_STEP``, drag rate ``step Fr / M``, launch velocity ``(ux, uy / step)``.
+
+        Returns:
+          The launch ``(qpos, qvel)`` (scaled).
+        """
+        rate = step * self._rate
+        self._scale = step
+        (x,), (z,) = self._dofs()
+        model, data = self.model.ptr, self.data.ptr  # raw arrays: this runs once per dm_env episode
+        model.dof_damping[x] = rate
+        model.actuator_gear[self._wind_actuator(), 0] = -rate
+        model.opt.timestep = flight.SCALED_STEP
+        data.time = 0.0
+        data.qpos[:] = 0.0
+        data.qvel[:] = 0.0
+        data.qvel[x] = ux
+        data.qvel[z] = uy / step
+        return data.qpos.copy(), data.qvel.copy()
+
+    def _wind_actuator(self) -> int:
+        return self.model.name2id("wind", "actuator")
 
     def fly(self, *, previous=None, history: bool = False):
-        """Step until the projectile is back at height 0; see ``flight.fly``."""
+        """Step until the projectile is back at height 0; see ``flight.fly`` (real x, height, time)."""
         x, z = self._dofs()
-        steps = flight.max_steps_for(float(np.max(self.data.qvel[z])) if previous is None else
-                                     float(previous[1][z].max()), G=-float(self.model.opt.gravity[2]),
-                                     dt=float(self.model.opt.timestep))
-        return flight.fly(self.model.ptr, self.data.ptr, x=x, z=z, max_steps=steps, previous=previous,
-                          history=history)
+        model, data = self.model.ptr, self.data.ptr
+        steps = flight.max_steps_for(float(data.qvel[z[0]]) if previous is None else float(previous[1][z[0]]),
+                                     G=-float(model.opt.gravity[2]), dt=float(model.opt.timestep))
+        return flight.fly(model, data, x=x, z=z, max_steps=steps, previous=previous,
+                          history=history, scale=getattr(self, "_scale", 1.0))
 
 
 def load_physics(G: float = 0.05) -> LauncherPhysics:
-    """The launcher physics with gravity ``G`` (Table 3's by default)."""
+    """The launcher physics with gravity ``G`` (Table 3's by default) and the model's drag and mass."""
     physics = LauncherPhysics.from_xml_path(str(model_path("launcher")))
     physics.model.opt.gravity[:] = (0.0, 0.0, -G)
+    (x,), _ = physics._dofs()
+    model = physics.model
+    physics.set_conditions(Fr=float(model.dof_damping[x]), W=0.0,
+                           M=float(model.body_mass[model.name2id("projectile", "body")]))
     return physics
 
 

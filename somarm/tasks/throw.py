@@ -202,15 +202,48 @@ class Throw(OneStepTask):
         candidates all miss (probability about 1e-44 for Table 6) keeps its first candidate
         with X pulled back to the farthest reachable landing.
         """
-        ok = self.reachable(candidates)
-        first = np.argmax(ok, axis=1)
-        chosen = candidates[np.arange(len(candidates)), first].copy()
-        missed = ~ok.any(axis=1)
+        n = len(candidates)
+        first = np.zeros(n, dtype=np.intp)
+        missed = np.ones(n, dtype=bool)
+        pending = np.arange(n)
+        # Column by column, only for the rows still without a reachable candidate: nearly every
+        # row is settled by its first candidate, so the reach is rarely computed more than once.
+        for column in range(candidates.shape[1]):
+            ok = self.reachable(candidates[pending, column])
+            first[pending[ok]] = column
+            missed[pending[ok]] = False
+            pending = pending[~ok]
+            if pending.size == 0:
+                break
+        chosen = candidates[np.arange(n), first].copy()
         if missed.any():
             c = self.conditions(chosen[missed])
             _, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
             chosen[missed, 0] = np.minimum(chosen[missed, 0], highest)
         return chosen
+
+    @classmethod
+    def rewards_together(cls, tasks: list[Throw], steps: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+        """Rewards of several throw tasks from one batch of flights (one gravity, tolerance and backend)."""
+        first = tasks[0]
+        if any((t.backend, t.params.G, t.params.tolerance) != (first.backend, first.params.G, first.params.tolerance)
+               for t in tasks):
+            return super().rewards_together(tasks, steps)
+        conditions = [t.conditions(o) for t, (o, _) in zip(tasks, steps, strict=True)]
+        shapes = [a.shape[:-1] for _, a in steps]
+        flat = {key: np.concatenate([np.broadcast_to(c[key], shape).ravel() for c, shape in zip(conditions, shapes,
+                                                                                                 strict=True)])
+                for key in ("Fr", "W", "M")}
+        ux = np.concatenate([a[..., 0].ravel() for _, a in steps])
+        uy = np.concatenate([a[..., 1].ravel() for _, a in steps])
+        landing = landing_x(ux, uy, params=first.params, backend=first.backend, **flat)
+        rewards, start = [], 0
+        for task, c, (_, a), shape in zip(tasks, conditions, steps, shapes, strict=True):
+            size = int(np.prod(shape))
+            rewards.append(throw_rewards(landing[start:start + size].reshape(shape), c["X"], a[..., 0], a[..., 1],
+                                         punish_low=task.params.punish_low))
+            start += size
+        return rewards
 
     def rewards(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
         c = self.conditions(observations)
@@ -235,7 +268,8 @@ class ThrowEnvTask(OneStepEnvTask):
     def apply_action(self, physics: launcher.LauncherPhysics, action: np.ndarray) -> None:
         c = self._conditions
         self._velocity = (float(action[0]), float(action[1]))
-        step = float(flight.step_for(action[0], c["W"], c["Fr"] / c["M"], tolerance=self.batched.params.tolerance))
+        step = float(flight.step_for(self._velocity[0], c["W"], c["Fr"] / c["M"],
+                                     tolerance=self.batched.params.tolerance))
         self._launch = physics.launch(*self._velocity, step=step)
 
     def reward_from_physics(self, physics: launcher.LauncherPhysics, observation: np.ndarray) -> float:
