@@ -194,6 +194,9 @@ class ConfigBase:
 
 
 # -- files ----------------------------------------------------------------------------------
+_META_KEYS = ("kind", "config", "bounds", "n_trials", "seed", "trial_ids", "t", "pending", "streams")
+
+
 def read_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """``(meta, arrays)`` of a saved learner; ValueError for a missing, damaged or foreign file."""
     try:
@@ -220,6 +223,8 @@ class LearnerBase(abc.ABC):
     config_class: type = object
     _STATE_ARRAYS: tuple[str, ...] = ()
     _PENDING_ARRAYS = ("_observations", "_winners", "_units", "_actions")
+    #: Arrays a file may lack (it predates them): they keep the value a fresh learner builds.
+    _OPTIONAL_ARRAYS: tuple[str, ...] = ()
 
     def __init__(self, config, *, observation_low, observation_high, action_low, action_high,
                  n_trials: int = 1, seed: int = 0, trial_ids=None):
@@ -378,9 +383,13 @@ class LearnerBase(abc.ABC):
         """Reopen a learner written by ``save``; it continues exactly where it stopped.
 
         Raises:
-          ValueError: the file is missing, unreadable or holds another kind of learner.
+          ValueError: the file is missing, unreadable, lacks an array or holds another kind of learner.
         """
         meta, arrays = read_file(path)
+        missing = [key for key in _META_KEYS if key not in meta] + [
+            name for name in ("stream_buffer",) if name not in arrays]
+        if missing:
+            raise ValueError(f"cannot read a learner from {path}: it has no {', '.join(missing)} (a damaged file)")
         if meta["kind"] != cls.kind:
             raise ValueError(f"{path} holds a {meta['kind']} learner, not {cls.kind}")
         low_s, high_s, low_a, high_a = meta["bounds"]
@@ -389,6 +398,10 @@ class LearnerBase(abc.ABC):
                       n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
         for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS:
             target = getattr(learner, name)
+            if name not in arrays:
+                if name in cls._OPTIONAL_ARRAYS:
+                    continue
+                raise ValueError(f"cannot read a learner from {path}: it has no {name} array (a damaged file)")
             if arrays[name].shape != target.shape:
                 raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")
             target[...] = arrays[name]

@@ -14,8 +14,8 @@ import numpy as np
 from somarm import evaluation, plots
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
 from somarm.reproduce.report import Claim, Section
-from somarm.somq import RESPONSES
 from somarm.run import RunConfig
+from somarm.somq import RESPONSES
 
 __all__ = ["TARGETS", "beyond"]
 
