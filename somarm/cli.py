@@ -1,4 +1,4 @@
-"""The ``somarm`` command line: tasks, presets, train, evaluate, reproduce, bench, view, sweep."""
+"""The ``somarm`` command line: tasks, presets, train, evaluate, compare, reproduce, bench, view, sweep."""
 
 from __future__ import annotations
 
@@ -8,28 +8,20 @@ import os
 import sys
 from pathlib import Path
 
+from somarm.validation import OneLineParser, check_int
+
 __all__ = ["main"]
 
-_BENCHMARKS = ("learner", "tasks", "viewer")
+_BENCHMARKS = ("learner", "tasks", "viewer", "adapters")
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse that reports a usage error in one line (``somarm: error: ...``)."""
-
-    def error(self, message: str):  # argparse's signature
-        raise ValueError(message)
-
-
-def _check_writable(folder: Path) -> Path:
-    """Create ``folder`` and prove it is writable before any long work starts."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / ".somarm-write-test"
-        probe.write_text("ok")
-        probe.unlink()
-    except OSError as exc:
-        raise ValueError(f"--out {folder} is not writable: {exc.strerror or exc}") from None
-    return folder
+def _out_folder(value: str | None, default: str) -> Path:
+    """The ``--out`` folder: the default when the flag is absent, never when it is given empty."""
+    if value is None:
+        return Path(default)
+    if not value.strip():
+        raise ValueError("--out needs a folder name, got an empty one")
+    return Path(value)
 
 
 def _first_line(exc: BaseException) -> str:
@@ -54,13 +46,27 @@ def _cmd_presets(args) -> int:
 
 def _cmd_train(args) -> int:
     from somarm import run
-    from somarm.stopping import sigterm_as_interrupt
+    from somarm.run_folder import claim
 
+    if args.port is not None and not 0 <= args.port <= 65535:
+        raise ValueError(f"--port must be in 0..65535, got {args.port}")
     config = run.from_options(args)
     group = run.RunGroup([config])  # built once: a bad preset, --set or --task-set fails before any output
-    out = _check_writable(Path(args.out or f"runs/{config.task}__{config.learner}__seed{config.seed}"))
+    out = _out_folder(args.out, f"runs/{config.task}__{config.learner}__seed{config.seed}")
+    owner = claim(out, force=args.force)  # one writer per folder; earlier results only with --force
+    try:
+        return _train_into(out, group, args, owner)
+    finally:
+        owner.release()
+
+
+def _train_into(out: Path, group, args, owner) -> int:
+    """Train a built run group of one config into the claimed folder ``out``; the exit status."""
+    from somarm import run
+    from somarm.stopping import signals_deferred, sigterm_as_interrupt
+
+    config = group.configs[0]
     sigterm_as_interrupt()
-    hook = None
     view = None
     if args.view:
         from somarm.viewer.live import LiveView
@@ -68,20 +74,29 @@ def _cmd_train(args) -> int:
         try:
             view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
         except (OSError, RuntimeError) as exc:
-            raise ValueError(
-                f"the viewer could not start on --host {args.host}: {_first_line(exc)}"
-            ) from None
+            owner.release(remove_if_unused=True)  # nothing was run: leave no empty folder behind
+            where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")
+            reason = _first_line(exc).split(" did not start: ")[-1]
+            raise ValueError(f"the viewer could not start on {where}: {reason}") from None
         print(f"viewer: {view.url}", flush=True)
-        hook = view.update
     try:
-        result = group.train(progress=not args.no_progress, on_step=hook)[0]
-    finally:
+        result = group.train(progress=not args.no_progress, on_step=None if view is None else view.update)[0]
+    except BaseException:
         if view is not None:
             view.close()
-    extra = run.greedy_summary(result)  # the run is written whatever happens here
-    if "greedy_error" in extra:
-        print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
-    run.write(result, out, figures=not args.no_figures, extra_summary=extra)
+        raise
+    try:
+        # A second Ctrl-C or SIGTERM waits until the run is written (it then still ends the command).
+        with signals_deferred():
+            if view is not None:
+                view.close()
+            extra = run.greedy_summary(result)  # the run is written whatever happens here
+            if "greedy_error" in extra:
+                print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
+            run.write(result, out, figures=not args.no_figures, extra_summary=extra)
+    except KeyboardInterrupt:
+        print(f"interrupted after step {result.steps_done}: results written to {out}", file=sys.stderr)
+        return 130
     if result.interrupted:
         print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
         return 130
@@ -96,6 +111,8 @@ def _cmd_train(args) -> int:
 def _cmd_evaluate(args) -> int:
     from somarm import evaluation, run
 
+    check_int("--observations", args.observations)
+    check_int("--seed", args.seed, minimum=0)
     config, learner = run.load(args.run)
     task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
     rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=args.seed)
@@ -108,12 +125,46 @@ def _cmd_evaluate(args) -> int:
 
 def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
+    from somarm.run_folder import REPORT_FILES, claim
     from somarm.stopping import sigterm_as_interrupt
 
     runner.check_names(args.only)
-    out = _check_writable(Path(args.out))
+    out = _out_folder(args.out, "reproduce")
+    # An existing report is replaced only with --force (a report of --only parts is not merged
+    # into an earlier one: its REPORT.md and claims.json would then mix two runs).
+    owner = claim(out, force=args.force, products=REPORT_FILES, what="a report")
     sigterm_as_interrupt()
-    return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
+    try:
+        return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress)
+    finally:
+        owner.release()
+
+
+def _cmd_compare(args) -> int:
+    from somarm import compare, tasks
+    from somarm.run_config import parse_assignments
+    from somarm.run_folder import claim
+    from somarm.stopping import sigterm_as_interrupt
+
+    config = compare.CompareConfig(
+        task=args.task,
+        learners=tuple(k.strip() for k in args.learners.split(",") if k.strip()),
+        samples=args.samples,
+        peer_samples=args.peer_samples,
+        seeds=args.seeds,
+        observations=args.observations,
+        task_params=tasks.parse_values(parse_assignments(args.task_set, "--task-set")),
+    )
+    compare.check(config)
+    out = _out_folder(args.out, f"compare/{config.task}")
+    owner = claim(out, force=args.force, products=("compare.json", "compare.png"), what="a comparison")
+    sigterm_as_interrupt()
+    try:
+        compare.compare(config, out, progress=not args.no_progress)
+    finally:
+        owner.release()
+    print(f"comparison written to {out / 'compare.json'} and {out / 'compare.png'}")
+    return 0
 
 
 def _cmd_sweep(args) -> int:
@@ -130,14 +181,15 @@ def _parser() -> argparse.ArgumentParser:
     from somarm import run
     from somarm.sweep import cli as sweep_cli
 
-    parser = _Parser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    parser = OneLineParser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     sub.add_parser("tasks", help="list the registered tasks").set_defaults(func=_cmd_tasks)
     sub.add_parser("presets", help="list the paper's parameter tables").set_defaults(func=_cmd_presets)
 
     train = sub.add_parser("train", help="train headless and write a run folder")
     run.add_options(train)  # every run setting, its default and help, from RunConfig
     train.add_argument("--out", help="run folder (default runs/TASK__LEARNER__seedS)")
+    train.add_argument("--force", action="store_true", help="replace the run already in --out")
     train.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.add_argument("--view", action="store_true", help="stream to a meshcat browser viewer")
@@ -153,12 +205,27 @@ def _parser() -> argparse.ArgumentParser:
 
     reproduce = sub.add_parser("reproduce", help="run every experiment of the paper and write REPORT.md")
     reproduce.add_argument("--quick", action="store_true", help="reduced trial counts (a smoke test)")
-    reproduce.add_argument("--out", default="reproduce", help="output folder (default ./reproduce)")
+    reproduce.add_argument("--out", help="output folder (default ./reproduce)")
+    reproduce.add_argument("--force", action="store_true", help="replace the report already in --out")
     reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
     reproduce.set_defaults(func=_cmd_reproduce)
 
-    bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer (pass --help after the name)")
+    comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")
+    comp.add_argument("task", help="task name (see `somarm tasks`)")
+    comp.add_argument("--learners", default="somq,motoric,tabular,td3,sac",
+                      help="comma-separated, from somq, motoric, tabular, td3, sac (default: all five)")
+    comp.add_argument("--samples", type=int, default=10_000, help="training samples (default 10000)")
+    comp.add_argument("--peer-samples", type=int, help="training samples of td3 and sac (default --samples)")
+    comp.add_argument("--seeds", type=int, default=3, help="seeds 0..K-1 for every learner (default 3)")
+    comp.add_argument("--observations", type=int, default=1000, help="fresh observations scored (1000)")
+    comp.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
+    comp.add_argument("--out", help="output folder (default compare/TASK)")
+    comp.add_argument("--force", action="store_true", help="replace an earlier comparison in --out")
+    comp.add_argument("--no-progress", action="store_true", help="no progress lines")
+    comp.set_defaults(func=_cmd_compare)
+
+    bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer, adapters (pass --help after the name)")
     bench.add_argument("name", choices=_BENCHMARKS)
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
 

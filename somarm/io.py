@@ -24,7 +24,8 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder, then rename.
 
     Raises:
-      ValueError: the folder does not exist or cannot be written (one clear line).
+      ValueError: the folder does not exist or cannot be written, the disk is full, or a folder
+        stands at ``path`` (one clear line naming ``path``).
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -42,12 +43,14 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         # Ctrl-C or a full disk: leave the old file (if any) and no stray temporary.
         try:
             os.unlink(tmp)
         except FileNotFoundError:
             pass
+        if isinstance(exc, OSError):  # a full disk, a folder in the way: one line naming the file
+            raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from None
         raise
     return path
 

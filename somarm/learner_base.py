@@ -15,27 +15,43 @@ import abc
 import dataclasses
 import json
 import os
-import zipfile
 from typing import Any
 
 import numpy as np
 
 from .io import atomic_save_npz
+from .learner_file import read_file, restore
 from .schedules import Schedule, parse_bool, parse_decay, parse_shape
 from .som import grid_coordinates, grid_distances, map_shape
 from .streams import PURPOSES, UniformStreams, trial_ids_for
-from .validation import check_bounds, check_int, check_number
+from .validation import check_bounds, check_int, check_memory, check_number, real_array
 
 __all__ = [
     "LearnerBase",
     "ConfigBase",
     "initial_generator",
+    "memory_needed",
     "read_file",
     "validate_common",
     "config_to_dict",
     "config_from_dict",
     "override_config",
 ]
+
+
+def memory_needed(kind: str, config: Any, n_trials: int, obs_dim: int, action_dim: int) -> tuple[str, float]:
+    """What a learner will allocate: ``(description, bytes)``, e.g. for ``check_memory``.
+
+    Counts the grid-distance matrices (built through a ``(units, units, grid dims)`` difference)
+    and, per trial, the weights and Q (SOM-Q) or unit values (Motoric Map).
+    """
+    maps = [name for name in ("input_shape", "action_shape") if hasattr(config, name)]  # Motoric: input only
+    units = [int(np.prod(getattr(config, name))) for name in maps]
+    n_s, n_a = units[0], units[-1]
+    n_floats = sum(n * n * (len(getattr(config, name)) + 1) for n, name in zip(units, maps, strict=True))
+    n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + (n_s * n_a if len(maps) == 2 else n_s))
+    shapes = ", ".join(f"{name}={'x'.join(map(str, getattr(config, name)))}" for name in maps)
+    return f"a {kind} learner with {shapes} and {n_trials} trial(s)", 8.0 * n_floats
 
 
 def initial_generator(seed: int, trial_id: int) -> np.random.Generator:
@@ -193,24 +209,6 @@ class ConfigBase:
         return cls(**{name: getattr(table, name) for name in shared})
 
 
-# -- files ----------------------------------------------------------------------------------
-_META_KEYS = ("kind", "config", "bounds", "n_trials", "seed", "trial_ids", "t", "pending", "streams")
-
-
-def read_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """``(meta, arrays)`` of a saved learner; ValueError for a missing, damaged or foreign file."""
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in data.files}
-        meta = json.loads(str(arrays.pop("meta")))
-    except (OSError, KeyError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        reason = "not a learner file (or a damaged one)" if "pickle" in str(exc) else str(exc)
-        raise ValueError(f"cannot read a learner from {path}: {reason}") from None
-    if not isinstance(meta, dict) or not isinstance(meta.get("kind"), str):
-        raise ValueError(f"{path} holds no learner kind")
-    return meta, arrays
-
-
 class LearnerBase(abc.ABC):
     """What SOM-Q and the Motoric Map share: the input map, checks, parameters, save and load.
 
@@ -223,7 +221,7 @@ class LearnerBase(abc.ABC):
     config_class: type = object
     _STATE_ARRAYS: tuple[str, ...] = ()
     _PENDING_ARRAYS = ("_observations", "_winners", "_units", "_actions")
-    #: Arrays a file may lack (it predates them): they keep the value a fresh learner builds.
+    #: Arrays a file may lack because it predates them: they keep the value a fresh learner builds.
     _OPTIONAL_ARRAYS: tuple[str, ...] = ()
 
     def __init__(self, config, *, observation_low, observation_high, action_low, action_high,
@@ -238,6 +236,7 @@ class LearnerBase(abc.ABC):
         self.seed = check_int("seed", seed, minimum=0)
         self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
         self.obs_dim, self.action_dim = self.observation_low.size, self.action_low.size
+        self._check_sizes()
         self.t = 0
         self.input_grid, self._distances_s = self._grid(config.input_shape)
         self.input_weights = np.empty((self.n_trials, self.input_grid.shape[0], self.obs_dim))
@@ -272,6 +271,17 @@ class LearnerBase(abc.ABC):
     def predict(self, observations) -> np.ndarray:
         """Greedy actions, no exploration, no learning: ``(n_trials, [n_obs,] action_dim)``."""
 
+    def _check_sizes(self) -> None:
+        """Refuse, before allocating, maps that do not fit in memory and an epsilon that overflows."""
+        check_memory(*memory_needed(self.kind, self.config, self.n_trials, self.obs_dim, self.action_dim),
+                     "use smaller maps or fewer trials")
+        largest = max(self.config.epsilon.scale, self.config.epsilon.floor)
+        span = np.max(self.action_high - self.action_low) if self.config.epsilon_relative else 1.0
+        with np.errstate(over="ignore"):  # a perturbed action: up to a few epsilons from a bound
+            if not np.isfinite(largest * span * 4.0 + np.max(np.abs([self.action_low, self.action_high]))):
+                raise ValueError(f"epsilon={largest:g} is too large: a perturbed action overflows; "
+                                 "give a number of the size of the action range")
+
     @staticmethod
     def _grid(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
         coordinates = grid_coordinates(shape)
@@ -298,10 +308,7 @@ class LearnerBase(abc.ABC):
     def _floats(name: str, value) -> np.ndarray:
         if type(value) is np.ndarray and value.dtype == np.float64:
             return value
-        try:
-            return np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}") from None
+        return real_array(name, value)
 
     def _check_observations(self, observations, *, allow_many=False, name="observations",
                             finite=True) -> np.ndarray:
@@ -313,6 +320,12 @@ class LearnerBase(abc.ABC):
         if finite and not np.isfinite(x).all():
             raise ValueError(f"{name} must be finite, got NaN or inf")
         return x
+
+    def _check_not_pending(self) -> None:
+        # A second act() would overwrite the first one's actions before they were learned from.
+        if self._pending:
+            raise ValueError("act() was called again before learn(): call learn(rewards) for the "
+                             "previous actions first (each act() is learned from once)")
 
     def _check_learn(self, rewards, next_observations, terminal, *, finite=True):
         """``(rewards, bootstrap, next_observations)`` checked; see ``_check_observations`` for ``finite``."""
@@ -383,28 +396,7 @@ class LearnerBase(abc.ABC):
         """Reopen a learner written by ``save``; it continues exactly where it stopped.
 
         Raises:
-          ValueError: the file is missing, unreadable, lacks an array or holds another kind of learner.
+          ValueError: the file is missing, unreadable, damaged (one line naming the file and what
+            is wrong) or holds another kind of learner.
         """
-        meta, arrays = read_file(path)
-        missing = [key for key in _META_KEYS if key not in meta] + [
-            name for name in ("stream_buffer",) if name not in arrays]
-        if missing:
-            raise ValueError(f"cannot read a learner from {path}: it has no {', '.join(missing)} (a damaged file)")
-        if meta["kind"] != cls.kind:
-            raise ValueError(f"{path} holds a {meta['kind']} learner, not {cls.kind}")
-        low_s, high_s, low_a, high_a = meta["bounds"]
-        learner = cls(cls.config_class.from_dict(meta["config"]), observation_low=low_s,
-                      observation_high=high_s, action_low=low_a, action_high=high_a,
-                      n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
-        for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS:
-            target = getattr(learner, name)
-            if name not in arrays:
-                if name in cls._OPTIONAL_ARRAYS:
-                    continue
-                raise ValueError(f"cannot read a learner from {path}: it has no {name} array (a damaged file)")
-            if arrays[name].shape != target.shape:
-                raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")
-            target[...] = arrays[name]
-        learner.t, learner._pending = int(meta["t"]), bool(meta["pending"])
-        learner._streams.set_state({**meta["streams"], "buffer": arrays["stream_buffer"]})
-        return learner
+        return restore(cls, path)

@@ -13,6 +13,7 @@ from typing import Any
 from .learner_base import initial_generator, read_file
 from .motoric import MotoricConfig, MotoricMap
 from .somq import SOMQ, SOMQConfig
+from .tabular import TabularConfig, TabularQ
 
 __all__ = ["LEARNERS", "KINDS", "config_class", "make", "load", "make_learner", "load_learner",
            "initial_generator"]
@@ -21,6 +22,7 @@ __all__ = ["LEARNERS", "KINDS", "config_class", "make", "load", "make_learner", 
 LEARNERS: dict[str, tuple[type, type]] = {
     "somq": (SOMQConfig, SOMQ),
     "motoric": (MotoricConfig, MotoricMap),
+    "tabular": (TabularConfig, TabularQ),
 }
 KINDS = tuple(LEARNERS)
 

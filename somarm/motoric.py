@@ -114,8 +114,9 @@ class MotoricMap(LearnerBase):
         """An exploring action per trial: ``(n_trials, obs_dim) -> (n_trials, action_dim)``.
 
         Raises:
-          ValueError: wrong shape, NaN or inf.
+          ValueError: wrong shape, NaN or inf; or the previous act() still waits for its learn().
         """
+        self._check_not_pending()
         x = self._check_observations(observations)
         uniforms = self._streams.next()
         if self._gaussian:

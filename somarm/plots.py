@@ -162,8 +162,12 @@ def draw_action_map(
 
 
 def run_figures(result, out: Path) -> list[Path]:
-    """The three figures of ``somarm train``: learning curve, input map, action map (trial 0)."""
+    """The three figures of ``somarm train``: learning curve, input map, action map (the first trial).
+
+    The maps show the run's first trial and name it by its trial id (``--trial-ids 7``: trial 7).
+    """
     config, learner, task = result.config, result.learner, result.task
+    first = int(config.trial_ids_array()[0])
     paths = []
     fig, ax = plt.subplots(figsize=(7, 4))
     window_blocks = max(1, min(1000, config.n_steps // 10) // config.block)
@@ -180,6 +184,8 @@ def run_figures(result, out: Path) -> list[Path]:
     ax.legend(loc="lower right")
     paths.append(save(fig, out / "learning_curve.png"))
 
+    if not hasattr(learner, "input_weights"):  # no maps to draw (the tabular learner's grids are fixed)
+        return paths
     input_weights = np.asarray(learner.input_weights)[0]
     grid_shape = tuple(learner.config.input_shape)
     if hasattr(learner, "q"):
@@ -194,7 +200,7 @@ def run_figures(result, out: Path) -> list[Path]:
     record = tasks.record(config.task)
     observation_labels, action_labels = record.observation_labels, record.action_labels
     draw_input_map(ax, input_weights, greedy, n_actions, grid_shape, labels=(*observation_labels, "")[:2])
-    ax.set_title("input map (trial 0), shaded by greedy action unit")
+    ax.set_title(f"input map (trial {first}), shaded by greedy action unit")
     paths.append(save(fig, out / "input_map.png"))
 
     fig, ax = plt.subplots(figsize=(5, 5))
@@ -207,9 +213,9 @@ def run_figures(result, out: Path) -> list[Path]:
         join=hasattr(learner, "q"),  # a Motoric Map's actions follow the input grid, not a chain
     )
     ax.set_title(
-        "action map (trial 0), shaded by unit index"
+        f"action map (trial {first}), shaded by unit index"
         if hasattr(learner, "q")
-        else "each input unit's action (trial 0), shaded by input unit"
+        else f"each input unit's action (trial {first}), shaded by input unit"
     )
     paths.append(save(fig, out / "action_map.png"))
     return paths

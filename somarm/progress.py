@@ -1,4 +1,10 @@
-"""A one-line progress display for headless training (no dependency, stderr only)."""
+"""A progress display for headless training (no dependency, stderr only).
+
+On a terminal it is one line redrawn in place (carriage returns). Into a file or a pipe (a CI
+log, ``2> log``) carriage returns would pile up, so there it writes plain lines instead: the first
+update (the run has started), then one at each tenth of the run or each minute, whichever comes
+first, and the final line once.
+"""
 
 from __future__ import annotations
 
@@ -6,16 +12,41 @@ import sys
 import time
 from typing import TextIO
 
-__all__ = ["Progress"]
+__all__ = ["Progress", "end_line"]
+
+#: Away from a terminal: one line per this share of the run, or per this many seconds.
+_LOG_SHARE = 0.1
+_LOG_PERIOD_S = 60.0
+
+
+#: The bar whose line is open on a terminal (drawn without its newline yet), if any.
+_open_bar: Progress | None = None
+
+
+def end_line() -> None:
+    """End an open progress line, so that a message printed next starts on a line of its own."""
+    global _open_bar
+    if _open_bar is not None:
+        _open_bar.stream.write("\n")
+        _open_bar.stream.flush()
+        _open_bar = None
+
+
+def _is_terminal(stream: TextIO) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):  # no isatty, or a closed stream
+        return False
 
 
 class Progress:
-    """Redraws ``label [###...] step/total  mean reward -0.123  12.3 s``, at most ``rate_hz`` times a second.
+    """Draws ``label [###...] step/total  mean reward -0.123  12.3 s``.
 
     Args:
       total: number of steps.
       label: text before the bar.
       stream: where to draw (stderr by default); nothing is drawn when ``enabled`` is false.
+      rate_hz: on a terminal, redraw at most this many times a second.
     """
 
     def __init__(
@@ -31,29 +62,44 @@ class Progress:
         self.label = label
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = enabled
+        self.terminal = _is_terminal(self.stream)
         self._period = 1.0 / rate_hz
         self._start = time.perf_counter()
         self._last = -float("inf")
+        self._every = max(1, round(self.total * _LOG_SHARE))  # steps between lines in a log
+        self._next_mark = self._every
+        self._drawn_step: int | None = None
 
     def update(self, step: int, mean_reward: float, *, force: bool = False) -> None:
-        """Redraw if enough time has passed (or ``force``)."""
+        """Redraw if enough time (terminal) or enough of the run (log) has passed, or if ``force``."""
         if not self.enabled:
             return
         now = time.perf_counter()
-        if not force and now - self._last < self._period:
-            return
+        if self.terminal:
+            if not force and now - self._last < self._period:
+                return
+        elif not force:
+            started = self._drawn_step is not None
+            if started and step < self._next_mark and now - self._last < _LOG_PERIOD_S:
+                return
+            while self._next_mark <= step:
+                self._next_mark += self._every
         self._last = now
+        self._drawn_step = step
         filled = int(30 * step / self.total)
         bar = "#" * filled + "." * (30 - filled)
-        self.stream.write(
-            f"\r{self.label} [{bar}] {step}/{self.total}  mean reward {mean_reward:+.4f}  "
-            f"{now - self._start:6.1f} s"
-        )
+        text = f"{self.label} [{bar}] {step}/{self.total}  mean reward {mean_reward:+.4f}  {now - self._start:6.1f} s"
+        self.stream.write(f"\r{text}" if self.terminal else f"{text}\n")
         self.stream.flush()
+        if self.terminal:
+            global _open_bar
+            _open_bar = self
 
     def close(self, step: int, mean_reward: float) -> None:
-        """Draw the final state and end the line."""
-        if self.enabled:
+        """Draw the final state (unless it is already the last line drawn) and end the line."""
+        if not self.enabled:
+            return
+        if self._drawn_step != step:
             self.update(step, mean_reward, force=True)
-            self.stream.write("\n")
-            self.stream.flush()
+        if self.terminal and _open_bar is self:
+            end_line()

@@ -24,6 +24,7 @@ from somarm.io import atomic_save_npz, atomic_write_json
 from somarm.protocols import BatchedTask, Learner
 from somarm.run_config import RunConfig, add_options, from_options, parse_assignments
 from somarm.training import StepHook, final_blocks, final_rewards, loop
+from somarm.validation import check_memory
 
 __all__ = [
     "RunConfig",
@@ -34,6 +35,7 @@ __all__ = [
     "make_task",
     "make_learner",
     "make",
+    "check_memory_needs",
     "train",
     "train_group",
     "RunGroup",
@@ -44,6 +46,10 @@ __all__ = [
     "task_for",
     "final_rewards",
 ]
+
+
+#: Memory per trial for its random streams (generators and buffers), task and learner together.
+_STREAM_BYTES_PER_TRIAL = 4096
 
 
 # -- building -----------------------------------------------------------------------------------
@@ -76,8 +82,33 @@ def make_learner(config: RunConfig, task: BatchedTask) -> Learner:
 
 def make(config: RunConfig) -> tuple[BatchedTask, Learner]:
     """Make the task and the learner of a (resolved) run config."""
+    check_memory_needs([config])
     task = make_task(config)
     return task, make_learner(config, task)
+
+
+def check_memory_needs(configs: list[RunConfig]) -> None:
+    """Refuse, before the task or a learner is built, runs that cannot fit in memory.
+
+    A lower bound (one observation and one action dimension) for the learners, plus the learning
+    curves (two floats per block and trial) and about 4 KiB per trial for the task's and the
+    learner's random streams (measured: 20,000 reach2 trials); each learner checks its exact need
+    again when built.
+
+    Raises:
+      ValueError: one line naming the settings and the size.
+    """
+    from somarm import presets
+    from somarm.learner_base import memory_needed
+
+    total, described = 0.0, []
+    for config in configs:
+        learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
+        what, n_bytes = memory_needed(config.learner, learner_config, config.n_trials, 1, 1)
+        total += n_bytes + (16.0 * (config.n_steps // config.block) + _STREAM_BYTES_PER_TRIAL) * config.n_trials
+        described.append(what)
+    check_memory(f"{'; '.join(described)}, over {configs[0].n_steps} steps", total,
+                 "use smaller maps, fewer trials or fewer steps (or a larger --block)")
 
 
 # -- training -----------------------------------------------------------------------------------
@@ -161,6 +192,7 @@ class RunGroup:
         if len(shared) != 1:
             raise ValueError("a group shares task, task_params, backend, seed, steps and block; these differ")
         first = self.configs[0]
+        check_memory_needs(self.configs)
         self.task = make_task(first, np.concatenate([c.trial_ids_array() for c in self.configs]))
         self.learners = [make_learner(c, self.task) for c in self.configs]
         bounds = np.cumsum([0] + [c.n_trials for c in self.configs])
@@ -255,12 +287,15 @@ def summary(result: RunResult, extra: dict[str, Any] | None = None) -> dict[str,
 
 def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
           extra_summary: dict[str, Any] | None = None) -> Path:
-    """Write a run folder: config.json, curves.npz, learner.npz, summary.json and PNG figures.
+    """Write a run folder: learner.npz, config.json, curves.npz, summary.json, then PNG figures.
 
     Every file is written atomically, so an interrupted write leaves the previous file or none.
+    The most valuable file goes first: with a full disk the trained learner (and the config that
+    ``somarm evaluate`` needs beside it) are kept even when the figures no longer fit.
 
     Raises:
-      ValueError: the folder cannot be created.
+      ValueError: the folder cannot be created, or a file cannot be written (one line naming the
+        file and the files already written, which are kept).
     """
     out = Path(out_dir)
     try:
@@ -269,21 +304,27 @@ def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
         raise ValueError(f"cannot create output folder {out}: {exc.strerror or exc}") from None
     config = result.config
     data = summary(result, extra_summary)
-    atomic_write_json(out / "config.json", {**config.to_dict(), "somarm_version": __version__})
-    atomic_save_npz(
-        out / "curves.npz",
-        block_means=result.block_means,
-        block_sq_means=result.block_sq_means,
-        block=config.block,
-        steps=result.steps,
-        seed=config.seed,
-    )
-    result.learner.save(out / "learner.npz")
+    steps = [
+        ("learner.npz", lambda: result.learner.save(out / "learner.npz")),
+        ("config.json", lambda: atomic_write_json(out / "config.json",
+                                                  {**config.to_dict(), "somarm_version": __version__})),
+        ("curves.npz", lambda: atomic_save_npz(out / "curves.npz", block_means=result.block_means,
+                                               block_sq_means=result.block_sq_means, block=config.block,
+                                               steps=result.steps, seed=config.seed)),
+        ("summary.json", lambda: atomic_write_json(out / "summary.json", data)),
+    ]
     if figures and result.steps_done > 0:
         from somarm import plots
 
-        plots.run_figures(result, out)
-    atomic_write_json(out / "summary.json", data)
+        steps.append(("the figures", lambda: plots.run_figures(result, out)))
+    written: list[str] = []
+    for name, write_file in steps:
+        try:
+            write_file()
+        except ValueError as exc:
+            kept = f"kept {', '.join(written)}" if written else "nothing was written"
+            raise ValueError(f"{exc} ({kept})") from None
+        written.append(name)
     return out
 
 
@@ -306,10 +347,31 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     if isinstance(data, dict):
         data.pop("somarm_version", None)
     try:
-        config = RunConfig.from_dict(data)
+        config = RunConfig.from_dict(data).resolved()  # the same checks as `train` (a seed >= 0, ...)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{out / 'config.json'}: {exc}") from None
-    return config, learners.load(out / "learner.npz")
+    learner = learners.load(out / "learner.npz")
+    _check_learner_fits(config, learner, out / "learner.npz")
+    return config, learner
+
+
+def _check_learner_fits(config: RunConfig, learner: Learner, path: Path) -> None:
+    """Refuse a learner file that is not the one config.json describes (another kind, task or batch)."""
+    where = f"{path} does not belong to {path.parent / 'config.json'}"
+    if learner.kind != config.learner:
+        raise ValueError(f"{where}: it holds a {learner.kind} learner, the config says {config.learner}")
+    if learner.seed != config.seed or learner.trial_ids.tolist() != config.trial_ids_array().tolist():
+        raise ValueError(f"{where}: its seed and trials ({learner.seed}, {learner.trial_ids.tolist()}) differ "
+                         f"from the config's ({config.seed}, {config.trial_ids_array().tolist()})")
+    task = make_task(config)
+    for what, ours, theirs in (
+        ("observation", (learner.observation_low, learner.observation_high),
+         (task.observation_low, task.observation_high)),
+        ("action", (learner.action_low, learner.action_high), (task.action_low, task.action_high)),
+    ):
+        if ours[0].shape != theirs[0].shape or not all(map(np.allclose, ours, theirs)):
+            raise ValueError(f"{where}: its {what} bounds are not those of task {config.task!r} "
+                             "(a learner of another task?)")
 
 
 def task_for(config: RunConfig, learner: Learner) -> BatchedTask:

@@ -35,9 +35,9 @@ class RunConfig:
     task: str = field(metadata=_option("task", "task name (see `somarm tasks`)"))
     """Registered task name (``somarm tasks`` lists them)."""
     learner: str = field(default="somq", metadata=_option(
-        "--learner", "learner kind: somq (the paper's model) or motoric (the Fig. 13 B baseline)",
+        "--learner", "learner kind: somq (the paper's model), motoric (the Fig. 13 B baseline) or tabular (a fixed grid)",
         metavar="KIND"))
-    """A kind of ``somarm.learners.KINDS``: ``somq`` (the paper's model) or ``motoric`` (Fig. 13 B)."""
+    """A kind of ``somarm.learners.KINDS``: ``somq`` (the paper's model), ``motoric`` (Fig. 13 B) or ``tabular``."""
     preset: str | None = field(default=None, metadata=_option(
         "--preset", "parameter table (see `somarm presets`); default: the task's", metavar="TABLE"))
     """Parameter table by name (``table1`` ...); None takes the task's default."""
@@ -85,10 +85,14 @@ class RunConfig:
             overrides=dict(self.overrides),
             task_params=dict(self.task_params),
         )
-        check_int("trials", resolved.n_trials)
-        check_int("steps", resolved.n_steps)
-        check_int("seed", resolved.seed, minimum=0)
-        check_int("block", resolved.block)
+        # Named by their somarm train flags: that is where a user meets them.
+        check_int("--trials", resolved.n_trials)
+        check_int("--steps", resolved.n_steps)
+        check_int("--seed", resolved.seed, minimum=0)
+        check_int("--block", resolved.block)
+        _check_blocks(resolved.n_steps, resolved.block)
+        for trial_id in resolved.trial_ids or []:
+            check_int("--trial-ids", trial_id, minimum=0)
         ids = resolved.trial_ids_array().tolist()
         if resolved.trial_ids is not None:
             if len(set(ids)) != len(ids):
@@ -114,6 +118,18 @@ class RunConfig:
             if not isinstance(data.get(key, {}), dict):
                 raise ValueError(f"run setting {key!r} must be a JSON object of KEY: VALUE")
         return cls(**data)
+
+
+def _check_blocks(n_steps: int, block: int) -> None:
+    """The learning curve is a point per whole block: refuse steps it would leave out."""
+    if block > n_steps:
+        raise ValueError(f"--block {block} is more than --steps {n_steps}: the learning curve would have no "
+                         "point; give a --block of at most --steps")
+    if n_steps % block:
+        lower, upper = n_steps - n_steps % block, n_steps - n_steps % block + block
+        raise ValueError(f"--steps {n_steps} is not a whole number of --block {block}: the last "
+                         f"{n_steps % block} steps would be left out of the learning curve; give --steps "
+                         f"{lower} or {upper}, or a --block that divides {n_steps}")
 
 
 # -- the command line, derived from RunConfig ---------------------------------------------------

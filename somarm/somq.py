@@ -147,8 +147,9 @@ class SOMQ(LearnerBase):
           Perturbed actions ``(n_trials, action_dim)`` inside the action bounds (a fresh array).
 
         Raises:
-          ValueError: wrong shape, NaN or inf.
+          ValueError: wrong shape, NaN or inf; or the previous act() still waits for its learn().
         """
+        self._check_not_pending()
         x = self._check_observations(observations, finite=False)
         if not _kernels.all_finite(x):  # before a random row is used
             raise ValueError("observations must be finite, got NaN or inf")

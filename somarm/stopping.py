@@ -13,7 +13,7 @@ import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["stop_between_steps", "sigterm_as_interrupt"]
+__all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred"]
 
 
 @contextlib.contextmanager
@@ -40,6 +40,35 @@ def stop_between_steps() -> Iterator[dict[str, bool]]:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[dict[str, int]]:
+    """Inside, Ctrl-C and SIGTERM are held back; on leaving, the first one held raises KeyboardInterrupt.
+
+    For the writing of results: a second Ctrl-C (or a SIGTERM) right after the one that stopped a
+    run waits until the files are written, instead of cutting the writing short. Only SIGKILL is
+    not held back. Outside the main thread nothing changes.
+    """
+    held = {"signal": 0}
+    if threading.current_thread() is not threading.main_thread():
+        yield held
+        return
+
+    def hold(signum, frame):
+        held["signal"] = held["signal"] or signum
+
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, handler in previous.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(sig, hold)
+    try:
+        yield held
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if held["signal"]:
+        raise KeyboardInterrupt
 
 
 def sigterm_as_interrupt() -> None:

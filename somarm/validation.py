@@ -2,16 +2,41 @@
 
 from __future__ import annotations
 
+import argparse
 import math
+import os
 
 import numpy as np
 
 __all__ = [
+    "OneLineParser",
     "check_int",
+    "check_int_list",
     "check_number",
     "check_array",
     "check_bounds",
+    "check_memory",
+    "real_array",
 ]
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that raises ``ValueError(message)`` on a usage error instead of printing usage and exiting.
+
+    The command line's entry point turns it into its one line, ``somarm: error: ...``.
+    """
+
+    def error(self, message: str):  # noqa: D401 - argparse's signature
+        raise ValueError(message)
+
+
+def check_int_list(name: str, text: str, *, minimum: int = 1) -> list[int]:
+    """``"1,20,100" -> [1, 20, 100]``, each >= ``minimum``; ValueError naming ``name`` otherwise."""
+    try:
+        values = [int(part) for part in str(text).split(",")]
+    except ValueError:
+        raise ValueError(f"{name} takes comma-separated whole numbers, got {text!r}") from None
+    return [check_int(name, value, minimum=minimum) for value in values]
 
 
 def check_int(name: str, value: object, *, minimum: int = 1) -> int:
@@ -39,16 +64,65 @@ def check_number(
     return value
 
 
+def real_array(name: str, value: object) -> np.ndarray:
+    """``value`` as a float64 array; ValueError for anything that is not real numbers.
+
+    Complex numbers are refused (numpy would drop their imaginary part with only a warning).
+    """
+    try:
+        array = np.asarray(value)
+        if np.iscomplexobj(array):
+            raise ValueError(f"{name} must be real numbers, got complex values")
+        return np.asarray(array, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        if "complex" in str(exc):
+            raise
+        raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}") from None
+
+
+def _available_memory() -> int | None:
+    """Bytes of memory a new allocation can get without swapping (Linux ``MemAvailable``), or None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_memory(what: str, n_bytes: float, hint: str) -> None:
+    """Refuse, before allocating, what would not fit in the memory available now.
+
+    Args:
+      what: what needs the memory, as the user set it (``input_shape=200x200 with 1 trial(s)``).
+      n_bytes: the estimate.
+      hint: what to change (``use smaller maps or fewer trials``).
+
+    Raises:
+      ValueError: one line naming ``what``, the size needed and the size available.
+    """
+    available = _available_memory()
+    if available is not None and n_bytes > available:
+        raise ValueError(f"{what} needs about {_gib(n_bytes)} of memory, more than the {_gib(available)} "
+                         f"available; {hint}")
+
+
+def _gib(n_bytes: float) -> str:
+    return f"{n_bytes / 2**30:.1f} GiB" if n_bytes >= 2**30 else f"{n_bytes / 2**20:.0f} MiB"
+
+
 def check_array(name: str, value: object, shape: tuple[int | None, ...]) -> np.ndarray:
     """``value`` as a finite float64 array of ``shape`` (None matches any length).
 
     Raises:
       ValueError: wrong shape (both shapes are named), or NaN/inf entries.
     """
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of numbers, got {type(value).__name__}") from None
+    array = real_array(name, value)
     if array.ndim != len(shape) or any(
         want is not None and got != want for got, want in zip(array.shape, shape, strict=True)
     ):

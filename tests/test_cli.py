@@ -63,12 +63,38 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
         (["train", "reach2", "--set", "lambda_a=3"], "learning rate"),
         (["train", "reach2", "--trial-ids", "3", "3"], "differ"),
         (["train", "reach2", "--trials", "5", "--trial-ids", "7"], "disagrees"),
-        (["train", "reach2", "--trial-ids", "-1"], "trial_ids"),
+        (["train", "reach2", "--trial-ids", "-1"], "--trial-ids must be a whole number >= 0"),
+        (["train", "reach2", "--trials", "0"], "--trials must be a whole number >= 1"),
+        (["train", "reach2", "--steps", "0"], "--steps must"),
+        (["train", "reach2", "--out", ""], "--out needs a folder name"),
+        (["reproduce", "--out", " "], "--out needs a folder name"),
+        (["train", "reach2", "--set", "epsilon=1e308"], "epsilon=1e+308 is too large"),
+        (["train", "reach2", "--set", "input_shape=1000x1000"], "input_shape=1000x1000, action_shape=50 and 1 "
+                                                               "trial(s), over 50000 steps needs about 22352.1 GiB"),
+        (["train", "reach2", "--view", "--port", "70000"], "--port must be in 0..65535"),
+        (["evaluate", "/nonexistent-run", "--observations", "0"], "--observations must"),
+        (["bench", "learner", "--steps", "-5"], "--steps must be a whole number >= 1"),
+        (["bench", "learner", "--trials", "1,x"], "--trials takes comma-separated whole numbers"),
+        (["bench", "tasks", "--threads", "0"], "--threads must be a whole number >= 1"),
+        (["bench", "viewer", "--rate", "0"], "--rate must be > 0"),
+        (["view", "juggle"], "unknown task 'juggle'"),
+        (["view", "reach2", "--bogus"], "unrecognized arguments: --bogus"),
+        (["view", "reach2", "--goals", "100000"], "--goals must be at most 200"),
+        (["view", "reach2", "--html", "."], "--html takes a file name, got a folder"),
+        (["train", "reach2", "--steps", "50", "--block", "100"], "--block 100 is more than --steps 50"),
+        (["train", "reach2", "--steps", "150", "--block", "100"],
+         "--steps 150 is not a whole number of --block 100: the last 50 steps would be left out"),
     ],
 )
 def test_bad_input_is_one_clear_line(args, expected, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    _one_line_error(capsys, main(args), expected)
+    code = main(args)
+    captured = capsys.readouterr()
+    err = captured.err.strip()
+    assert code == 2 and err.startswith("somarm: error: ") and expected in err, err
+    assert "Traceback" not in err and len(err.splitlines()) == 1
+    assert captured.out == ""  # refused before any output (a table header)
+    assert list(tmp_path.iterdir()) == []  # and before any folder was made
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
@@ -85,7 +111,7 @@ def test_a_signal_mid_run_leaves_a_valid_partial_run(tmp_path, sig):
         deadline = time.monotonic() + 60
         line = ""
         while "mean reward" not in line and time.monotonic() < deadline:  # training has started
-            line = proc.stderr.read(200)
+            line = proc.stderr.readline()  # away from a terminal the progress bar writes whole lines
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=60)
     finally:
@@ -125,8 +151,17 @@ def test_bad_input_leaves_no_output_folder(tmp_path, capsys):
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
-def test_a_run_shorter_than_one_block_writes_valid_json(tmp_path):
-    assert main(["train", "reach2", "--steps", "50", "--no-progress", "--out", str(tmp_path)]) == 0
+def test_a_run_stopped_before_one_block_writes_valid_json(tmp_path):
+    # --steps shorter than a --block is refused; a run stopped inside its first block is not.
+    from somarm import run
+
+    def stop_at_50(step, observations, actions, rewards):
+        if step == 50:
+            raise KeyboardInterrupt
+
+    result = run.train(run.RunConfig(task="reach2", n_steps=200), progress=False, on_step=stop_at_50)
+    run.write(result, tmp_path, extra_summary=run.greedy_summary(result))
+
     def no_nan(constant):
         raise AssertionError(f"summary.json holds {constant}, which is not JSON")
 

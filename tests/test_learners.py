@@ -9,10 +9,13 @@ BOX = dict(observation_low=[0.0, 0.0], observation_high=[1.0, 1.0], action_low=[
 
 
 def test_registry():
-    assert learners.LEARNERS == {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap)}
+    from somarm.tabular import TabularConfig, TabularQ
+
+    assert learners.LEARNERS == {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap),
+                                 "tabular": (TabularConfig, TabularQ)}
 
 
-@pytest.mark.parametrize("kind", ["somq", "motoric"])
+@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
 def test_make_and_load_any_kind(tmp_path, kind):
     learner = learners.make_learner(kind, None, n_trials=2, seed=3, **BOX)
     assert learner.kind == kind
@@ -58,12 +61,64 @@ def test_bench_learner_smoke(capsys):
     assert "interpolated within 2x of the winner response" in out
 
 
+@pytest.mark.parametrize("kind", ["somq", "motoric"])
+def test_act_twice_without_learn_is_refused(kind):
+    learner = learners.make_learner(kind, None, n_trials=2, **BOX)
+    learner.act(np.full((2, 2), 0.3))
+    with pytest.raises(ValueError, match=r"act\(\) was called again before learn\(\)"):
+        learner.act(np.full((2, 2), 0.3))
+    learner.learn(np.zeros(2))
+    learner.act(np.full((2, 2), 0.3))  # after learn, act again is fine
+
+
+@pytest.mark.parametrize("kind", ["somq", "motoric"])
+def test_complex_numbers_are_refused_not_truncated(kind):
+    learner = learners.make_learner(kind, None, n_trials=1, **BOX)
+    with pytest.raises(ValueError, match="observations must be real numbers, got complex"):
+        learner.act(np.array([[0.3 + 1j, 0.3]]))
+    learner.act(np.array([[0.3, 0.3]]))
+    with pytest.raises(ValueError, match="rewards must be real numbers"):
+        learner.learn(np.array([1j]))
+
+
+def test_complex_actions_are_refused_by_the_task():
+    from somarm import tasks
+
+    task = tasks.make("reach2", n_trials=1)
+    task.reset()
+    with pytest.raises(ValueError, match="must be real numbers, got complex"):
+        task.step(np.array([[0.1 + 0.5j, 0.1]]))
+
+
+def test_memory_is_estimated_before_allocating(monkeypatch):
+    from somarm import validation
+
+    monkeypatch.setattr(validation, "_available_memory", lambda: 2**30)
+    config = SOMQConfig(input_shape=(100, 100), action_shape=(10,))
+    with pytest.raises(ValueError, match=r"input_shape=100x100, action_shape=10 and 1 trial\(s\) needs about "
+                                         r"2\.2 GiB of memory, more than the 1\.0 GiB available"):
+        learners.make_learner("somq", config, **BOX)
+    learners.make_learner("somq", SOMQConfig(input_shape=(30, 30), action_shape=(10,)), **BOX)  # 19 MiB
+
+
+@pytest.mark.parametrize("relative", [False, True])
+def test_an_epsilon_that_overflows_is_refused(relative):
+    config = SOMQConfig(epsilon=1e308, epsilon_relative=relative)
+    with pytest.raises(ValueError, match="epsilon=1e\\+308 is too large"):
+        learners.make_learner("somq", config, **BOX)
+    learners.make_learner("somq", SOMQConfig(epsilon=1e6, epsilon_relative=relative), **BOX)  # large but finite
+
+
 @pytest.mark.parametrize("kind", learners.KINDS)
 def test_every_kind_is_layered_and_has_presets(kind):
     from somarm import presets
     from somarm.learner_base import ConfigBase, LearnerBase
+    from somarm.protocols import Learner
 
     config_class, learner_class = learners.LEARNERS[kind]
-    assert issubclass(config_class, ConfigBase) and issubclass(learner_class, LearnerBase)
+    assert issubclass(config_class, ConfigBase)
+    # The map learners share LearnerBase (the input map); the tabular learner has fixed grids instead.
+    assert issubclass(learner_class, LearnerBase) or kind == "tabular"
+    assert isinstance(learners.make(kind, None, **BOX), Learner)
     assert learner_class.kind == kind and learner_class.config_class is config_class
     assert isinstance(presets.config_for(kind, "table2"), config_class)

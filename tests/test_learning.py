@@ -19,7 +19,7 @@ def test_reach2_greedy_error_falls_below_bound():
     # Table 1, 3 trials x 20,000 steps. Measured (this seed): greedy distance to fresh goals 0.026-0.041
     # (0.033 at 50,000 steps over 20 trials); untrained 0.45-0.97. Bound 0.08: twice the worst trial seen.
     result = run.train(RunConfig(task="reach2", n_trials=3, n_steps=20_000, seed=1), progress=False)
-    untrained = run.train(RunConfig(task="reach2", n_trials=3, n_steps=1, seed=1), progress=False)
+    untrained = run.train(RunConfig(task="reach2", n_trials=3, n_steps=1, block=1, seed=1), progress=False)
     error, before = _greedy_error(result), _greedy_error(untrained)
     assert before.mean() > 0.2
     assert error.mean() < 0.08, f"greedy reach2 error {error} after 20,000 steps"

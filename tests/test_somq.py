@@ -312,8 +312,7 @@ def test_act_copies_the_proposed_action_and_input_init_is_used():
     learner = SOMQ(config, n_trials=3, seed=1, **BOX2)
     assert learner.input_weights.min() >= 0.25 and learner.input_weights.max() < 0.5
     before = learner.action_weights.copy()
-    for _ in range(10):  # act without learn: step 7 is the only place the action map may move
-        actions = learner.act(np.full((3, 2), 0.3))
+    actions = learner.act(np.full((3, 2), 0.3))  # step 7 (in learn) is the only place the action map may move
     np.testing.assert_array_equal(learner.action_weights, before)
     assert not np.isin(actions, before).any()
     actions[...] = 99.0  # the returned array is the caller's: changing it must not reach the learner

@@ -1,7 +1,8 @@
 """End to end in a real headless Chromium: the page's scene holds the model at MuJoCo's poses.
 
 Needs Debian's ``chromium`` (``.ci/run`` installs it) and Playwright for Python; it never runs
-``playwright install``. Where either is missing the tests are skipped with the reason.
+``playwright install``. Where either is missing the tests are skipped with the reason (with CI=true
+that skip is a failure, see conftest.py).
 Screenshots go to the test's tmp folder; set ``SOMARM_SCREENSHOTS=docs`` to also write the
 README's pictures (``docs/viewer-*.png``).
 """

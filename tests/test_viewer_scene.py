@@ -95,8 +95,6 @@ def test_each_geom_pose_equals_mujoco(source):
 
 
 def test_real_arm_fingertip_and_reach_poses_match_kinematics():
-    if not (MODELS / "arm2.xml").exists():
-        pytest.skip("models/arm2.xml is not in the repository yet")
     model = mujoco.MjModel.from_xml_path(str(MODELS / "arm2.xml"))
     scene = MujocoScene(model, prefix="/meshcat/arm2")
     theta = np.array([0.7, -1.1])
@@ -231,9 +229,6 @@ def test_importing_somarm_does_not_import_meshcat():
 
 
 def test_arm_show_error_is_the_tasks_reward_and_the_tip_is_mujocos_site():
-    tasks = pytest.importorskip("somarm.tasks")
-    if not hasattr(tasks, "make"):
-        pytest.skip("somarm.tasks.make is not in the repository yet")
     from somarm.viewer.feed import own_task
     from somarm.viewer.shows import show_for_task
 

@@ -10,6 +10,7 @@ import sys
 import textwrap
 import time
 import warnings
+from pathlib import Path
 
 import meshcat.geometry as mg
 import mujoco
@@ -170,7 +171,7 @@ _PARENT = textwrap.dedent(
     from somarm.viewer.server import MeshcatServer, stop_on_signals
     server = MeshcatServer().start()
     stop_on_signals(server)
-    print(server.process.pid, flush=True)
+    print(server.process.pid, server.log_path.parent, flush=True)
     try:
         time.sleep(60)
     except KeyboardInterrupt:
@@ -185,17 +186,36 @@ _PARENT = textwrap.dedent(
 def test_the_server_is_not_orphaned(how):
     parent = subprocess.Popen([sys.executable, "-c", _PARENT], stdout=subprocess.PIPE, text=True)
     try:
-        server_pid = int(parent.stdout.readline())
-        assert pid_alive(server_pid)
+        pid, folder = parent.stdout.readline().split()
+        server_pid, folder = int(pid), Path(folder)
+        assert pid_alive(server_pid) and folder.is_dir()
         parent.send_signal(how)
         parent.wait(timeout=10)
         assert wait_until(lambda: not pid_alive(server_pid), timeout_s=10), f"server {server_pid} orphaned"
+        assert not folder.exists(), f"{folder} left behind"
         if how == signal.SIGTERM:
             assert parent.returncode == 128 + signal.SIGTERM
     finally:
         if parent.poll() is None:
             parent.kill()
             parent.wait()
+
+
+def test_a_server_start_removes_folders_of_dead_owners(tmp_path):
+    import tempfile
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True, check=True)
+    stale = Path(tempfile.gettempdir()) / f"somarm-meshcat-{int(dead.stdout)}-test"
+    stale.mkdir()
+    (stale / "server.log").write_text("left by a SIGKILL")
+    ours = Path(tempfile.gettempdir()) / f"somarm-meshcat-{os.getpid()}-test"
+    ours.mkdir()
+    try:
+        with MeshcatServer():
+            assert not stale.exists() and ours.is_dir()  # a live owner's folder stays
+    finally:
+        ours.rmdir()
 
 
 async def _scene_messages(port: int, n_wait_s: float = 1.0) -> list[dict]:
@@ -307,17 +327,6 @@ def test_live_view_rejects_bad_arguments():
         view.update(1, np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
 
 
-def _tasks_ready() -> bool:
-    try:
-        from somarm import run, tasks  # noqa: F401
-    except ImportError:
-        return False
-    return hasattr(tasks, "make") and hasattr(run, "make")
-
-
-needs_tasks = pytest.mark.skipif(not _tasks_ready(), reason="somarm.tasks.make is not in the repository yet")
-
-
 def test_cli_rejects_bad_input_in_one_line(capsys):
     from somarm.viewer.cli import main
 
@@ -329,7 +338,6 @@ def test_cli_rejects_bad_input_in_one_line(capsys):
     assert main(["reach2", "--port", "70000"]) == 2
 
 
-@needs_tasks
 @pytest.mark.parametrize("task", ["reach2", "four_goals", "reach20", "throw"])
 def test_cli_writes_an_offline_animation(task, tmp_path, capsys):
     from somarm.viewer.cli import main
@@ -341,7 +349,6 @@ def test_cli_writes_an_offline_animation(task, tmp_path, capsys):
     assert "mean error" in capsys.readouterr().out
 
 
-@needs_tasks
 def test_cli_serves_until_ctrl_c_and_leaves_no_server():
     command = [sys.executable, "-m", "somarm.viewer.cli", "reach2", "--goals", "2", "--interval", "0.2"]
     env = dict(os.environ, MUJOCO_GL="disable")

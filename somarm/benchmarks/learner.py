@@ -10,7 +10,6 @@ action map learns (about half the steps here). Each figure is the best of ``--re
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import time
 from dataclasses import dataclass
@@ -20,6 +19,7 @@ import numpy as np
 from ..presets import get
 from ..reference import ReferenceSOMQ
 from ..somq import SOMQ, SOMQConfig
+from ..validation import OneLineParser, check_int, check_int_list
 
 __all__ = ["Case", "CASES", "time_batched", "time_reference", "interpolated_rows", "main"]
 
@@ -109,16 +109,17 @@ def interpolated_rows(n_steps: int, repeats: int, *, n_trials: int = 100, late: 
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table; returns 0 (the targets are reported, not enforced)."""
-    parser = argparse.ArgumentParser(prog="somarm bench learner", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="somarm bench learner", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps (a smoke run)")
     parser.add_argument("--steps", type=int, help="steps per timing (default 2000, quick 200)")
     parser.add_argument("--t0", type=int, default=0, help="step the schedules start at (default 0)")
     parser.add_argument("--repeats", type=int, help="best of this many runs (default 3, quick 1)")
     parser.add_argument("--trials", default="1,20,100", help="comma-separated n_trials (default 1,20,100)")
     args = parser.parse_args(argv)
-    n_steps = args.steps or (200 if args.quick else 2000)
-    repeats = args.repeats or (1 if args.quick else 3)
-    trial_counts = [int(n) for n in args.trials.split(",")]
+    n_steps = check_int("--steps", args.steps if args.steps is not None else (200 if args.quick else 2000))
+    repeats = check_int("--repeats", args.repeats if args.repeats is not None else (1 if args.quick else 3))
+    check_int("--t0", args.t0, minimum=0)
+    trial_counts = check_int_list("--trials", args.trials)
     print(f"SOM-Q act + learn, {n_steps} steps from t = {args.t0}, best of {repeats}; "
           "reference = line-by-line single trial (somarm.reference)")
     print(f"{'maps':36s} {'n_trials':>8s} {'batched us/trial-step':>22s} {'reference us/step':>18s} "

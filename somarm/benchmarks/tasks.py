@@ -12,7 +12,6 @@ to the default two threads shows how much of the machine the run actually got.
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
@@ -20,6 +19,7 @@ import numpy as np
 from somarm import tasks
 from somarm.tasks import flight
 from somarm.tasks import throw as throw_module
+from somarm.validation import OneLineParser, check_int
 
 __all__ = ["TARGETS", "measure", "main"]
 
@@ -93,14 +93,15 @@ def measure(name: str, *, n: int, repeats: int, episodes: int, steps: int) -> di
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table; returns 0 (a benchmark reports, it does not fail)."""
-    parser = argparse.ArgumentParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small batches, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--only", nargs="+", metavar="TASK",
                         help="benchmark only these tasks ('driven': the actuated and obstacle rows)")
     parser.add_argument("--threads", type=int, default=2, help="threads of the MuJoCo backend (2)")
     args = parser.parse_args(argv)
-    tasks.set_threads(args.threads)
+    check_int("--repeats", args.repeats)
+    tasks.set_threads(check_int("--threads", args.threads))
     names = args.only or [name for name in tasks.names() if name != "reach2_obstacle"]
     driven = args.only is None or "driven" in names or "reach2_obstacle" in names
     names = [name for name in names if name not in ("driven", "reach2_obstacle")]

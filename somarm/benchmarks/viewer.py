@@ -11,7 +11,6 @@ renders WebGL in software and competes with training for the cores: compare the 
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import sys
@@ -19,6 +18,8 @@ import time
 import timeit
 
 import numpy as np
+
+from somarm.validation import OneLineParser, check_int, check_number
 
 __all__ = ["main"]
 
@@ -42,13 +43,16 @@ def _throttled_update_ns(view) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; returns 0."""
-    parser = argparse.ArgumentParser(prog="somarm bench viewer", description=__doc__.split("\n")[0])
+    parser = OneLineParser(prog="somarm bench viewer", description=__doc__.split("\n")[0])
     parser.add_argument("--task", default="reach2")
     parser.add_argument("--steps", type=int, default=20_000)
     parser.add_argument("--trials", type=int, default=1)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--rate", type=float, default=30.0, help="LiveView max_rate_hz")
     args = parser.parse_args(argv)
+    for name in ("steps", "trials", "repeats"):
+        check_int(f"--{name}", getattr(args, name))
+    check_number("--rate", args.rate, minimum=0.0, strict_minimum=True)
 
     from somarm.run import RunConfig
     from somarm.viewer.live import LiveView
@@ -107,4 +111,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from somarm.cli import main as somarm_main
+
+    sys.exit(somarm_main(["bench", "viewer", *sys.argv[1:]]))

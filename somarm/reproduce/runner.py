@@ -10,12 +10,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from somarm import __version__
+from somarm.compare import peers_missing
 from somarm.io import atomic_write_json, atomic_write_text
-from somarm.reproduce import arms, beyond, delayed, throws
+from somarm.reproduce import arms, beyond, delayed, peers, throws
 from somarm.reproduce.common import Context
 from somarm.reproduce.report import Section, render
 
-__all__ = ["EXPERIMENTS", "check_names", "reproduce", "load_claims"]
+__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -31,13 +32,18 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "beyond": beyond.beyond,
 }
 
+#: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
+OPTIONAL: dict[str, Callable[[Context], Section]] = {"peers": peers.peers}
+
 
 def check_names(only: list[str] | None) -> list[str]:
     """The experiments to run, in the paper's order; ValueError listing the names for an unknown one."""
     names = list(only or EXPERIMENTS)
-    unknown = [n for n in names if n not in EXPERIMENTS]
+    unknown = [n for n in names if n not in EXPERIMENTS and n not in OPTIONAL]
     if unknown:
-        raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join(EXPERIMENTS)}")
+        raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join([*EXPERIMENTS, *OPTIONAL])}")
+    if "peers" in names and (reason := peers_missing()):
+        raise ValueError(reason)
     return names
 
 
@@ -62,7 +68,7 @@ def reproduce(
     for name in names:
         began = time.perf_counter()
         try:
-            section = EXPERIMENTS[name](ctx)
+            section = {**EXPERIMENTS, **OPTIONAL}[name](ctx)
         except KeyboardInterrupt:
             print(
                 f"\ninterrupted during {name}; the report holds the experiments that finished",
@@ -70,6 +76,10 @@ def reproduce(
             )
             status = 130
             break
+        except ValueError as exc:  # a figure that cannot be written (a full disk): keep the report so far
+            _keep_report(out, sections, quick=quick, seed=seed, total=time.perf_counter() - start)
+            raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
+                             "experiment(s) that finished") from None
         section.wall_time_s = time.perf_counter() - began
         sections.append(section)
         print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
@@ -80,6 +90,14 @@ def reproduce(
     claims = sum(len(s.claims) for s in sections)
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold; {total:.1f} s)")
     return status
+
+
+def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
+    """Write the report of the finished experiments, if there is room for it (best effort)."""
+    try:
+        _write(out, sections, complete=False, **kwargs)
+    except ValueError:
+        pass  # the report of the previous experiment stays as it was
 
 
 def _write(

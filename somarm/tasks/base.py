@@ -16,6 +16,7 @@ from dm_control.suite import base
 from dm_env import specs
 
 from somarm.streams import UniformStreams, trial_ids_for
+from somarm.validation import real_array
 
 __all__ = ["Backend", "BACKENDS", "OneStepTask", "OneStepEnvTask", "check_actions"]
 
@@ -32,10 +33,7 @@ def check_actions(name: str, actions: object, low: np.ndarray, high: np.ndarray)
     Raises:
       ValueError: wrong last axis, NaN or inf, or a value outside the bounds (one line).
     """
-    try:
-        array = np.asarray(actions, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of numbers, got {type(actions).__name__}") from None
+    array = real_array(name, actions)
     if array.ndim == 0 or array.shape[-1] != low.size:
         raise ValueError(f"{name} must have shape (..., {low.size}), got {array.shape}")
     if not np.isfinite(array).all():

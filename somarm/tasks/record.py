@@ -62,6 +62,9 @@ class TaskRecord:
     """How ``somarm view`` shows a trained learner: ``goals`` (one pose per goal, in turn),
     ``sweep`` (every goal's posture at once, as Fig. 11) or ``fan`` (every action unit thrown at
     once, as Fig. 16)."""
+    episodic: bool = False
+    """Episodes last several steps (the task's ``step`` sets ``next_observations``/``terminal``);
+    False for the one-step tasks (``somarm.gym`` adapts those)."""
 
     def params_from(self, given: dict[str, Any]) -> Any:
         """The params of this task with ``given`` fields changed from their defaults.

@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 
 import tornado.httpserver
@@ -170,6 +171,9 @@ def main(argv: list[str] | None = None) -> int:
         bridge.run()
     except KeyboardInterrupt:
         pass
+    if args.parent_pid is not None and os.getppid() != args.parent_pid:
+        # Our owner died without stopping us (SIGKILL): nobody else will remove its folder.
+        shutil.rmtree(os.path.dirname(os.path.abspath(args.ready_file)), ignore_errors=True)
     return 0
 
 

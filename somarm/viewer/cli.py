@@ -14,13 +14,25 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 __all__ = ["main", "build_parser"]
 
 
+#: At most this many goals: each is a pose in the page (1000 made a 28 MB HTML file).
+MAX_GOALS = 200
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error as ``somarm: error: ...`` in one line, as ``somarm`` does."""
+
+    def error(self, message: str):  # noqa: D401 - argparse's signature
+        raise ValueError(message)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``somarm view`` argument parser."""
-    parser = argparse.ArgumentParser(prog="somarm view", description=__doc__.split("\n")[0],
+    parser = _Parser(prog="somarm view", description=__doc__.split("\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog="\n".join(__doc__.split("\n")[2:]))
     parser.add_argument("task", help="task name (reach2, four_goals, reach20, throw, throw_distance, ...)")
@@ -31,8 +43,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--html", default=None, metavar="FILE",
                         help="write a self-contained HTML animation to FILE instead of serving")
     parser.add_argument("--seed", type=int, default=0, help="seed of the goals shown (default 0)")
-    parser.add_argument("--goals", type=int, default=12, help="how many goals to cycle through (default 12)")
-    parser.add_argument("--trial", type=int, default=0, help="which trial of the run to show (default 0)")
+    parser.add_argument("--goals", type=int, default=12,
+                        help=f"how many goals to cycle through (default 12, at most {MAX_GOALS})")
+    parser.add_argument("--trial", type=int, default=None,
+                        help="which trial of the run to show, by its trial id (default: the run's first)")
     parser.add_argument("--interval", type=float, default=1.5, help="seconds per goal when live (default 1.5)")
     parser.add_argument("--once", action="store_true", help="go through the goals once, then stop")
     parser.add_argument("--task-set", action="append", default=None, metavar="KEY=VALUE",
@@ -42,19 +56,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``somarm view``; returns the exit status (0 ok, 2 bad input, 130 Ctrl-C)."""
-    args = build_parser().parse_args(argv)
     try:
+        args = build_parser().parse_args(argv)
         from somarm import tasks
         from somarm.validation import check_int, check_number
         from somarm.viewer import sessions
 
         tasks.record(args.task)  # an unknown task is named before anything else is checked
         check_int("--goals", args.goals)
+        if args.goals > MAX_GOALS:
+            raise ValueError(f"--goals must be at most {MAX_GOALS}, got {args.goals}")
         check_int("--seed", args.seed, minimum=0)
-        check_int("--trial", args.trial, minimum=0)
+        if args.trial is not None:
+            check_int("--trial", args.trial, minimum=0)
         check_number("--interval", args.interval, minimum=0.0)
         if args.port is not None and not 0 <= args.port <= 65535:
             raise ValueError(f"--port must be in 0..65535, got {args.port}")
+        if args.html is not None and (not args.html or Path(args.html).is_dir()):
+            raise ValueError(f"--html takes a file name, got {'a folder, ' if args.html else ''}{args.html!r}")
         from somarm.run_config import parse_assignments
 
         task_set = parse_assignments(args.task_set, "--task-set")
@@ -70,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"wrote {path} (mean error {session.errors.mean():.4f} over {len(session.errors)} goals)")
             return 0
     except ValueError as exc:
-        print(f"somarm view: {exc}", file=sys.stderr)
+        print(f"somarm: error: {exc}", file=sys.stderr)
         return 2
     return _serve(session, args)
 
@@ -84,7 +103,9 @@ def _serve(session, args) -> int:
     try:
         server.start()
     except (RuntimeError, OSError) as exc:
-        print(f"somarm view: {exc}", file=sys.stderr)
+        where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")
+        reason = str(exc).split(" did not start: ")[-1]
+        print(f"somarm: error: the viewer could not start on {where}: {reason}", file=sys.stderr)
         return 2
     stop_on_signals(server)
     client = MeshcatClient(server.zmq_url)

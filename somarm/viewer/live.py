@@ -17,6 +17,7 @@ import warnings
 
 import numpy as np
 
+from somarm.progress import end_line
 from somarm.validation import check_int, check_number
 from somarm.viewer.client import ViewerUnavailableWarning
 
@@ -127,6 +128,7 @@ class LiveView:
 
     def _switch_off(self, reason: str) -> None:
         self.alive = False
+        end_line()  # the warning gets a line of its own, not the end of the progress bar's
         warnings.warn(f"the meshcat viewer's server {reason}; viewing is off, training carries on",
                       ViewerUnavailableWarning, stacklevel=3)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import atexit
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -24,6 +25,8 @@ from somarm.validation import check_int, check_number
 __all__ = ["MeshcatServer", "stop_on_signals"]
 
 _STOP_GRACE_S = 3.0
+#: Each server's log and ready file live in ``<tmp>/somarm-meshcat-<owner pid>-<random>``.
+_FOLDER_PREFIX = "somarm-meshcat-"
 
 
 class MeshcatServer:
@@ -73,11 +76,12 @@ class MeshcatServer:
 
         Raises:
           RuntimeError: the server exited early (e.g. port taken) or did not come up in time;
-            the message holds the end of its log.
+            the message is one line: the error the server's log ends with.
         """
         if self.process is not None:
             return self
-        self._folder = tempfile.TemporaryDirectory(prefix="somarm-meshcat-")
+        _remove_stale_folders()
+        self._folder = tempfile.TemporaryDirectory(prefix=f"{_FOLDER_PREFIX}{os.getpid()}-")
         ready_file = Path(self._folder.name) / "ready.json"
         log = open(self.log_path, "wb")  # the child owns it from here
         command = [
@@ -96,9 +100,9 @@ class MeshcatServer:
         deadline = time.monotonic() + self.start_timeout_s
         while not ready_file.exists():
             if self.process.poll() is not None or time.monotonic() > deadline:
-                tail = self.log_path.read_text(errors="replace")[-2000:]
+                reason = _last_error(self.log_path.read_text(errors="replace"))
                 self.stop()
-                raise RuntimeError(f"meshcat server on {self.host}:{self.requested_port} did not start: {tail}")
+                raise RuntimeError(f"meshcat server on {self.host}:{self.requested_port} did not start: {reason}")
             time.sleep(0.02)
         ready = json.loads(ready_file.read_text())
         self.web_url, self.zmq_url, self.port = ready["web_url"], ready["zmq_url"], int(ready["port"])
@@ -134,6 +138,39 @@ class MeshcatServer:
     def __repr__(self) -> str:
         state = "running" if self.alive() else "stopped"
         return f"MeshcatServer(host={self.host!r}, port={self.port}, {state})"
+
+
+def _remove_stale_folders() -> None:
+    """Remove the folders of servers whose owner died without stopping them (SIGKILL, power loss).
+
+    The bridge removes its own folder when its owner dies; this catches the case where both died.
+    """
+    for folder in Path(tempfile.gettempdir()).glob(f"{_FOLDER_PREFIX}*-*"):
+        owner = folder.name[len(_FOLDER_PREFIX):].split("-", 1)[0]
+        if owner.isdigit() and not _pid_alive(int(owner)):
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, someone else's
+        return True
+    return True
+
+
+def _last_error(log: str) -> str:
+    """The line of a child's log that says what went wrong (a traceback's last line), without its type.
+
+    ``OSError: [Errno 98] Address already in use`` -> ``[Errno 98] Address already in use``.
+    """
+    lines = [line.strip() for line in log.splitlines() if line.strip()]
+    if not lines:
+        return "it exited without a word (or took too long)"
+    kind, sep, text = lines[-1].partition(": ")
+    return text if sep and kind.replace(".", "").replace("_", "").isalnum() and " " not in kind else lines[-1]
 
 
 def stop_on_signals(server: MeshcatServer) -> None:

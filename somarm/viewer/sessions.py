@@ -62,7 +62,7 @@ def _sweep_order(observations: np.ndarray) -> np.ndarray:
 
 
 def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int = 12, seed: int = 0,
-                 trial: int = 0, task_set: dict[str, str] | None = None) -> Session:
+                 trial: int | None = None, task_set: dict[str, str] | None = None) -> Session:
     """Goals drawn from the task (the ``viewer`` random stream of ``seed``) and the learner's answers.
 
     Args:
@@ -70,7 +70,8 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
       run: a run folder (config.json + learner.npz); None shows an untrained learner.
       n_goals: how many goals are cycled through (or swept, for reach20).
       seed: seed of the goals (and of the untrained learner).
-      trial: which trial of the run's learner is shown.
+      trial: which trial of the run's learner is shown, by its trial id (a run of ``--trial-ids 7``
+        holds trial 7); None shows the run's first trial.
       task_set: task parameters changed over the run's (``--task-set``), e.g. ``{"dynamics": "actuated"}``.
 
     Raises:
@@ -88,8 +89,11 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         config = runs.RunConfig(task=task_name, seed=seed).resolved()
         _, learner = runs.make(config)
         task_params = {}
-    if not 0 <= trial < learner.n_trials:
-        raise ValueError(f"--trial must be in 0..{learner.n_trials - 1} for this run, got {trial}")
+    ids = [int(i) for i in learner.trial_ids]
+    if trial is not None and trial not in ids:
+        allowed = f"0..{ids[-1]}" if ids == list(range(len(ids))) else ", ".join(map(str, ids))
+        raise ValueError(f"--trial must be one of this run's trials ({allowed}), got {trial}")
+    trial = ids.index(ids[0] if trial is None else trial)  # from here on: the index in the batch
     task_params = {**task_params, **tasks.parse_values(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
     task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase

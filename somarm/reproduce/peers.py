@@ -1,0 +1,105 @@
+"""The comparison part: SOM-Q beside a fixed action grid and SB3's TD3 and SAC (``--only peers``).
+
+Not part of the default reproduction (TD3 and SAC cost about 20 ms per sample, so the part takes
+far longer than the paper's experiments); ``somarm reproduce --only peers`` runs it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from somarm import compare
+from somarm.plots_compare import NAMES
+from somarm.reproduce.common import Context, fmt
+from somarm.reproduce.report import Claim, Section
+from somarm.tabular import MAX_TABLE_ENTRIES, TabularConfig
+
+__all__ = ["TASKS", "peers", "table"]
+
+#: The tasks of the part and the learners run on each (a fixed grid cannot take reach20's 20 angles).
+TASKS: dict[str, tuple[str, ...]] = {
+    "reach2": compare.LEARNERS,
+    "reach20": ("somq", "motoric", "td3", "sac"),
+    "throw_distance": compare.LEARNERS,
+}
+
+
+def table(result: dict) -> list[str]:
+    """Markdown rows: median greedy error per learner (columns) at each sample count (rows), then costs."""
+    kinds = list(result["learners"])
+    rungs = sorted({n for data in result["learners"].values() for n in data["samples"]})
+    lines = ["| samples | " + " | ".join(NAMES[k] for k in kinds) + " |", "|---" * (len(kinds) + 1) + "|"]
+    for rung in rungs:
+        cells = []
+        for kind in kinds:
+            data = result["learners"][kind]
+            cells.append(fmt(float(np.median(data["error"][data["samples"].index(rung)])), 2)
+                         if rung in data["samples"] else "-")
+        lines.append(f"| {rung} | " + " | ".join(cells) + " |")
+    per_sample = [f"{1e3 * float(np.median(result['learners'][k]['seconds_per_sample'])):.3g}" for k in kinds]
+    lines.append("| ms per sample | " + " | ".join(per_sample) + " |")
+    return lines
+
+
+def _final(result: dict, kind: str) -> float:
+    return float(np.median(result["learners"][kind]["error"][-1]))
+
+
+def peers(ctx: Context) -> Section:
+    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time."""
+    section = Section("peers", "Peers: SOM-Q beside a fixed action grid, TD3 and SAC (Stable-Baselines3)")
+    seeds = ctx.pick(2, 1)
+    peer_samples = ctx.pick(1000, 120)
+    budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
+    results = {}
+    for task, learners in TASKS.items():
+        samples = budgets[task]
+        config = compare.CompareConfig(task=task, learners=learners, samples=samples, peer_samples=peer_samples,
+                                       seeds=seeds, eval_seed=ctx.seed)
+        out = ctx.out_dir / "peers" / task
+        results[task] = compare.compare(config, out, progress=ctx.progress)
+        section.figures.append(out / "compare.png")
+        section.notes += ["", f"`{task}`: median greedy error over {seeds} seed(s) on the same "
+                          f"{config.observations} fresh observations (random actions score "
+                          f"{fmt(results[task]['random_action_error'], 2)}); full data in "
+                          f"`peers/{task}/compare.json`.", "", *table(results[task])]
+    low_dim = ("reach2", "throw_distance")
+    ratios = {t: _final(results[t], "tabular") / _final(results[t], "somq") for t in low_dim}
+    section.claims.append(Claim(
+        "Discussion: where the action space is low-dimensional, it may be easier to hardwire fixed actions at "
+        "regular intervals and use standard Q-learning.",
+        "after the same samples, the fixed grid's median error is "
+        + ", ".join(f"{fmt(ratios[t], 2)} x SOM-Q's on {t}" for t in low_dim) + ".",
+        all(r <= 1.1 for r in ratios.values()),
+        "the grid's error at most 1.1 x SOM-Q's on both tasks",
+    ))
+    grid = TabularConfig(action_bins=2)
+    entries = grid.action_bins ** 20 * grid.observation_bins ** 2
+    somq20 = _final(results["reach20"], "somq")
+    random20 = results["reach20"]["random_action_error"]
+    section.claims.append(Claim(
+        "Fig. 11: with 20 joint angles it is infeasible to populate the action space with enough a priori fixed "
+        "actions; SOM-Q's adaptive action map learns the task.",
+        f"even 2 values per angle over the {grid.observation_bins ** 2} observation cells make {entries:,} table "
+        f"entries (the limit is "
+        f"{MAX_TABLE_ENTRIES:,}); SOM-Q's 50 action units reach a median error {fmt(somq20, 2)} (random actions "
+        f"{fmt(random20, 2)}).",
+        entries > MAX_TABLE_ENTRIES and somq20 < random20 / 2,
+        "no fixed grid fits, and SOM-Q's error below half the random actions'",
+    ))
+    for task in TASKS:
+        fast = {k: np.median(v["seconds_per_sample"]) for k, v in results[task]["learners"].items()}
+        section.notes += ["", f"Cost per sample on `{task}`: TD3 {fast['td3'] / fast['somq']:.3g} x and SAC "
+                          f"{fast['sac'] / fast['somq']:.3g} x SOM-Q's (same run, same machine)."]
+    section.choices += [
+        f"Budgets: somarm's learners train for "
+        f"{', '.join(f'{fmt(n)} samples on {t}' for t, n in budgets.items())}"
+        f"{'' if ctx.quick else ' (the tasks default run lengths)'}, TD3 and SAC for "
+        f"{peer_samples} samples (each costs a gradient step); {seeds} seed(s), the same for every learner.",
+        "TD3 and SAC use Stable-Baselines3's defaults (MlpPolicy, torch on one thread) through `somarm.gym`; "
+        "every setting is written into each `compare.json`.",
+        "The tabular learner: 16 cells per observation dimension, 16 actions per action dimension, sample-mean Q, "
+        "epsilon = 1/(t/1000 + 1) (as SOM-Q's p in Table 1).",
+        "Error is minus the mean reward on the same fresh observations for every learner (the evaluation stream).",
+    ]
+    return section
