@@ -221,6 +221,8 @@ class LearnerBase(abc.ABC):
     config_class: type = object
     _STATE_ARRAYS: tuple[str, ...] = ()
     _PENDING_ARRAYS = ("_observations", "_winners", "_units", "_actions")
+    #: Arrays a file may lack because it predates them: they keep the value a fresh learner builds.
+    _OPTIONAL_ARRAYS: tuple[str, ...] = ()
 
     def __init__(self, config, *, observation_low, observation_high, action_low, action_high,
                  n_trials: int = 1, seed: int = 0, trial_ids=None):

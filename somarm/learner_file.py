@@ -98,9 +98,11 @@ def _restore(cls: type, meta: dict[str, Any], arrays: dict[str, np.ndarray], pat
                   observation_high=high_s, action_low=low_a, action_high=high_a,
                   n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
     for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS + ("stream_buffer",):
-        if name not in arrays:
+        if name not in arrays and name not in cls._OPTIONAL_ARRAYS:
             raise ValueError(f"{path} is a damaged learner file: array {name!r} is missing")
     for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS:
+        if name not in arrays:  # an optional array the file predates: the fresh learner's value stays
+            continue
         target = getattr(learner, name)
         if arrays[name].shape != target.shape:
             raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")

@@ -134,6 +134,8 @@ class SOMQ(LearnerBase):
     _STATE_ARRAYS = ("input_weights", "action_weights", "q")
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     _PENDING_ARRAYS = LearnerBase._PENDING_ARRAYS + ("_shifted",)
+    # Files saved before ``_shifted`` existed load with it all False: nothing shifts (the winner response).
+    _OPTIONAL_ARRAYS = ("_shifted",)
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).

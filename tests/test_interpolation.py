@@ -198,3 +198,36 @@ def test_cli_trains_views_and_rejects_an_unknown_response(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("somarm: error:") and "response must be one of winner, interpolated" in err
     assert len(err.splitlines()) == 1
+
+
+def _without(path, name, out):
+    """Copy the learner file ``path`` to ``out`` without its array ``name`` (an older or damaged file)."""
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {key: data[key] for key in data.files if key != name}
+    np.savez(out, **arrays)
+    return out
+
+
+def test_a_file_saved_before_shifted_existed_still_loads_and_resumes(tmp_path):
+    config = _config((6,), True, 0.0)
+    config = dataclasses.replace(config, response="winner")
+    whole = SOMQ(config, n_trials=2, seed=5, **BOUNDS)
+    rng = np.random.default_rng(1)
+    observations = rng.uniform([0, -1], [1, 1], (40, 2, 2))
+    for x in observations[:20]:
+        whole.learn(-np.abs(whole.act(x)).sum(axis=1))
+    whole.act(observations[20])  # saved between act and learn
+    whole.save(tmp_path / "new.npz")
+    old = SOMQ.load(_without(tmp_path / "new.npz", "_shifted", tmp_path / "old.npz"))
+    assert not old._shifted.any()
+    for learner in (whole, old):
+        learner.learn(-np.abs(learner._actions).sum(axis=1))
+        for x in observations[21:]:
+            learner.learn(-np.abs(learner.act(x)).sum(axis=1))
+    np.testing.assert_array_equal(old.action_weights, whole.action_weights)
+    np.testing.assert_array_equal(old.q, whole.q)
+    # A file that lacks an array every learner has is damaged: one line naming the file and the array.
+    damaged = _without(tmp_path / "new.npz", "q", tmp_path / "damaged.npz")
+    with pytest.raises(ValueError, match=r"damaged\.npz is a damaged learner file: array 'q' is missing$") as err:
+        SOMQ.load(damaged)
+    assert "\n" not in str(err.value)
