@@ -12,7 +12,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["all_finite", "act_kernel", "learn_kernel"]
+__all__ = ["all_finite", "nearest_unit", "act_kernel", "learn_kernel"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -27,7 +27,8 @@ def all_finite(values):
 
 
 @numba.njit(cache=True)
-def _winner(x, weights):
+def nearest_unit(x, weights):
+    """Index of the row of ``weights (n_units, dim)`` nearest ``x`` (squared distance), ties to the lowest."""
     best = np.inf
     j = 0
     for m in range(weights.shape[0]):
@@ -77,7 +78,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
     n_a = q.shape[2]
     for trial in range(observations.shape[0]):
         row = rows[trial]
-        j = _winner(observations[trial], input_weights[trial])
+        j = nearest_unit(observations[trial], input_weights[trial])
         if row[0] < p:
             k = min(int(row[1] * n_a), n_a - 1)
         else:
@@ -131,7 +132,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
         k = units[trial]
         target = rewards[trial]
         if bootstrap[trial]:
-            j_next = _winner(next_observations[trial], input_weights[trial])
+            j_next = nearest_unit(next_observations[trial], input_weights[trial])
             top = q[trial, j_next, 0]
             for n in range(1, n_units_a):
                 if q[trial, j_next, n] > top:

@@ -48,6 +48,8 @@ import math
 import numba
 import numpy as np
 
+from ._kernels import nearest_unit
+
 __all__ = ["MAX_JUMP", "NEIGHBOUR_SHARE", "n_basis_for", "act_kernel", "predict_kernel"]
 
 #: Largest action-map grid distance between the winner's greedy action unit and a blended one.
@@ -198,7 +200,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         shifted[trial] = not row[0] < p
         if row[0] < p:
             # Exploring: the paper's random action unit, its weights unblended.
-            j = _winner_only(observations[trial], input_weights[trial])
+            j = nearest_unit(observations[trial], input_weights[trial])
             k = _exploring_unit(q[trial, j], row[1], row[2], distances_a)
             for i in range(proposal.shape[0]):
                 proposal[i] = action_weights[trial, k, i]
@@ -219,21 +221,6 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
             targets[trial, i] = min(max(target, low[i]), high[i])
         winners[trial] = j
         units[trial] = k
-
-
-@numba.njit(cache=True)
-def _winner_only(x, weights):
-    best = np.inf
-    j = 0
-    for m in range(weights.shape[0]):
-        total = 0.0
-        for i in range(x.shape[0]):
-            diff = x[i] - weights[m, i]
-            total += diff * diff
-        if total < best:
-            best = total
-            j = m
-    return j
 
 
 @numba.njit(cache=True)
