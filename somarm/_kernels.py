@@ -12,7 +12,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["all_finite", "nearest_unit", "act_kernel", "learn_kernel"]
+__all__ = ["all_finite", "nearest_unit", "perturbation", "act_kernel", "learn_kernel"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -40,6 +40,17 @@ def nearest_unit(x, weights):
             best = total
             j = m
     return j
+
+
+@numba.njit(cache=True)
+def perturbation(row, i, gaussian):
+    """The unit-scale noise of action dimension ``i`` from a row of uniforms: a standard normal
+    (Box-Muller on ``row[3 + 2i], row[4 + 2i]``) or uniform in [-1, 1) (``row[3 + i]``)."""
+    if gaussian:
+        u1 = row[3 + 2 * i]
+        u2 = row[4 + 2 * i]
+        return math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(_TWO_PI * u2)
+    return 2.0 * row[3 + i] - 1.0
 
 
 @numba.njit(cache=True)
@@ -99,12 +110,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
                         break
                     pick -= 1
         for i in range(actions.shape[1]):
-            if gaussian:
-                u1 = row[3 + 2 * i]
-                u2 = row[4 + 2 * i]
-                noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(_TWO_PI * u2)
-            else:
-                noise = 2.0 * row[3 + i] - 1.0
+            noise = perturbation(row, i, gaussian)
             value = action_weights[trial, k, i] + noise * epsilon[i]
             actions[trial, i] = min(max(value, low[i]), high[i])
         winners[trial] = j

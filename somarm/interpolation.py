@@ -48,7 +48,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernels import nearest_unit
+from ._kernels import nearest_unit, perturbation
 
 __all__ = ["MAX_JUMP", "NEIGHBOUR_SHARE", "n_basis_for", "act_kernel", "predict_kernel"]
 
@@ -56,8 +56,6 @@ __all__ = ["MAX_JUMP", "NEIGHBOUR_SHARE", "n_basis_for", "act_kernel", "predict_
 MAX_JUMP = 1.0
 #: Share of the exploring steps that try a map neighbour of the winner's greedy action unit.
 NEIGHBOUR_SHARE = 0.5
-
-_TWO_PI = 2.0 * math.pi
 
 
 def n_basis_for(input_shape: tuple[int, ...]) -> int:
@@ -209,12 +207,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
                              row[2], distances_a, n_basis, low, high, order, squared, beta, blended_units,
                              proposal)
         for i in range(actions.shape[1]):
-            if gaussian:
-                u1 = row[3 + 2 * i]
-                u2 = row[4 + 2 * i]
-                noise = math.sqrt(-2.0 * math.log1p(-u1)) * math.cos(_TWO_PI * u2)
-            else:
-                noise = 2.0 * row[3 + i] - 1.0
+            noise = perturbation(row, i, gaussian)
             value = min(max(proposal[i] + noise * epsilon[i], low[i]), high[i])
             actions[trial, i] = value
             target = value + (action_weights[trial, k, i] - proposal[i])

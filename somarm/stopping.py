@@ -31,15 +31,8 @@ def stop_between_steps() -> Iterator[dict[str, bool]]:
     def request(signum, frame):
         stop["requested"] = True
 
-    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    for sig, handler in previous.items():
-        if handler is not signal.SIG_IGN:
-            signal.signal(sig, request)
-    try:
+    with _handled_by(request):
         yield stop
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
 
 
 @contextlib.contextmanager
@@ -58,15 +51,8 @@ def signals_deferred() -> Iterator[dict[str, int]]:
     def hold(signum, frame):
         held["signal"] = held["signal"] or signum
 
-    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    for sig, handler in previous.items():
-        if handler is not signal.SIG_IGN:
-            signal.signal(sig, hold)
-    try:
+    with _handled_by(hold):
         yield held
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
     if held["signal"]:
         raise KeyboardInterrupt
 
@@ -79,3 +65,17 @@ def sigterm_as_interrupt() -> None:
 
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, handler)
+
+
+@contextlib.contextmanager
+def _handled_by(handler) -> Iterator[None]:
+    """Inside, SIGINT and SIGTERM go to ``handler``; signals being ignored stay ignored; restored after."""
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, old in previous.items():
+        if old is not signal.SIG_IGN:
+            signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
