@@ -13,13 +13,12 @@ from __future__ import annotations
 
 import abc
 import dataclasses
-import json
 import os
 from typing import Any
 
 import numpy as np
 
-from .io import atomic_save_npz
+from . import learner_file
 from .learner_file import read_file, restore
 from .schedules import Schedule, parse_bool, parse_decay, parse_shape
 from .som import grid_coordinates, grid_distances, map_shape
@@ -375,21 +374,8 @@ class LearnerBase(abc.ABC):
     # -- save / load ----------------------------------------------------------------------------
     def save(self, path: str | os.PathLike) -> None:
         """Write the whole state (config, maps, values, step, random streams) atomically to ``path``."""
-        streams = self._streams.get_state()
-        meta = {
-            "kind": self.kind,
-            "config": self.config.to_dict(),
-            "bounds": [b.tolist() for b in (self.observation_low, self.observation_high,
-                                            self.action_low, self.action_high)],
-            "n_trials": self.n_trials,
-            "seed": self.seed,
-            "trial_ids": self.trial_ids.tolist(),
-            "t": self.t,
-            "pending": self._pending,
-            "streams": {key: value for key, value in streams.items() if key != "buffer"},
-        }
         arrays = {name: getattr(self, name) for name in self._STATE_ARRAYS + self._PENDING_ARRAYS}
-        atomic_save_npz(path, meta=np.array(json.dumps(meta)), stream_buffer=streams["buffer"], **arrays)
+        learner_file.write(self, path, arrays)
 
     @classmethod
     def load(cls, path: str | os.PathLike):

@@ -14,7 +14,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["read_file", "check_meta", "restore"]
+from .io import atomic_save_npz
+
+__all__ = ["write", "read_file", "check_meta", "restore"]
 
 #: What a learner file's meta JSON holds: key -> (JSON type(s), what it is), checked on load.
 _META_KEYS: dict[str, tuple[tuple[type, ...], str]] = {
@@ -29,6 +31,25 @@ _META_KEYS: dict[str, tuple[tuple[type, ...], str]] = {
     "streams": ((dict,), "a JSON object with width, block, pos and bit_generators"),
 }
 _STREAM_KEYS = ("width", "block", "pos", "bit_generators")
+
+
+def write(learner: Any, path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> None:
+    """Write ``learner``'s meta (kind, config, bounds, seed, trial ids, step, streams) and ``arrays``
+    atomically to ``path``: the one writer of the format that ``read_file`` reads."""
+    streams = learner._streams.get_state()
+    meta = {
+        "kind": learner.kind,
+        "config": learner.config.to_dict(),
+        "bounds": [b.tolist() for b in (learner.observation_low, learner.observation_high,
+                                        learner.action_low, learner.action_high)],
+        "n_trials": learner.n_trials,
+        "seed": learner.seed,
+        "trial_ids": learner.trial_ids.tolist(),
+        "t": learner.t,
+        "pending": learner._pending,
+        "streams": {key: value for key, value in streams.items() if key != "buffer"},
+    }
+    atomic_save_npz(path, meta=np.array(json.dumps(meta)), stream_buffer=streams["buffer"], **arrays)
 
 
 def check_meta(meta: Any, path: str | os.PathLike, kinds: tuple[str, ...] | None = None) -> dict[str, Any]:

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import atomic_save_npz
+from . import learner_file
 from .learner_base import ConfigBase, override_config
 from .schedules import InverseDecay, Schedule
 from .streams import UniformStreams, trial_ids_for
@@ -246,18 +246,7 @@ class TabularQ:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write the whole state (config, tables, step, random streams) atomically to ``path``."""
-        streams = self._streams.get_state()
-        meta = {
-            "kind": self.kind,
-            "config": self.config.to_dict(),
-            "bounds": [b.tolist() for b in (self.observation_low, self.observation_high,
-                                            self.action_low, self.action_high)],
-            "n_trials": self.n_trials, "seed": self.seed, "trial_ids": self.trial_ids.tolist(),
-            "t": self.t, "pending": self._pending,
-            "streams": {key: value for key, value in streams.items() if key != "buffer"},
-        }
-        arrays = {name: getattr(self, name) for name in self._ARRAYS}
-        atomic_save_npz(path, meta=np.array(json.dumps(meta)), stream_buffer=streams["buffer"], **arrays)
+        learner_file.write(self, path, {name: getattr(self, name) for name in self._ARRAYS})
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> TabularQ:
