@@ -23,9 +23,7 @@ values per joint give 10^6 actions, which is why a fixed grid cannot stand in fo
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
-import zipfile
 from dataclasses import dataclass
 from typing import Any
 
@@ -253,22 +251,24 @@ class TabularQ:
         """Reopen a learner written by ``save``; it continues exactly where it stopped.
 
         Raises:
-          ValueError: the file is missing, unreadable or holds another kind of learner.
+          ValueError: the file is missing, unreadable, damaged or holds another kind of learner
+            (one line naming the file).
         """
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                arrays = {name: data[name] for name in data.files}
-            meta = json.loads(str(arrays.pop("meta")))
-        except (OSError, KeyError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-            raise ValueError(f"cannot read a learner from {path}: {exc}") from None
+        meta, arrays = learner_file.read_file(path)
+        missing = [name for name in (*cls._ARRAYS, "stream_buffer") if name not in arrays]
+        if missing:
+            raise ValueError(f"{path} is a damaged learner file: array {missing[0]!r} is missing")
         if meta.get("kind") != cls.kind:
             raise ValueError(f"{path} holds a {meta.get('kind')} learner, not {cls.kind}")
         low_s, high_s, low_a, high_a = meta["bounds"]
-        learner = cls(TabularConfig.from_dict(meta["config"]), observation_low=low_s, observation_high=high_s,
-                      action_low=low_a, action_high=high_a, n_trials=meta["n_trials"], seed=meta["seed"],
-                      trial_ids=meta["trial_ids"])
-        for name in cls._ARRAYS:
-            getattr(learner, name)[...] = arrays[name]
+        try:
+            learner = cls(TabularConfig.from_dict(meta["config"]), observation_low=low_s,
+                          observation_high=high_s, action_low=low_a, action_high=high_a,
+                          n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
+            for name in cls._ARRAYS:
+                getattr(learner, name)[...] = arrays[name]
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{path} is a damaged learner file: {exc}") from None
         learner.t, learner._pending = int(meta["t"]), bool(meta["pending"])
         learner._streams.set_state({**meta["streams"], "buffer": arrays["stream_buffer"]})
         return learner

@@ -129,3 +129,19 @@ def test_a_paper_table_gives_its_exploration_probability_and_discount():
     config = TabularConfig.from_table(table)
     assert config.epsilon == table.p and config.gamma == table.gamma
     assert TabularConfig.from_dict(config.to_dict()) == config
+
+
+def test_a_damaged_file_is_one_line_naming_it(tmp_path):
+    import json
+
+    learner = TabularQ(TabularConfig(), observation_low=[0, 0], observation_high=[1, 1], action_low=[0, 0],
+                       action_high=[1, 1], n_trials=2, seed=0)
+    path = tmp_path / "learner.npz"
+    learner.save(path)
+    saved = dict(np.load(path))
+    for name, change in (("meta-list", {"meta": np.array(json.dumps([1]))}), ("no-q", {"q": None})):
+        damaged = {key: value for key, value in {**saved, **change}.items() if value is not None}
+        np.savez(tmp_path / f"{name}.npz", **damaged)
+        with pytest.raises(ValueError, match=rf"^{tmp_path / name}\.npz is a damaged learner file: ") as info:
+            TabularQ.load(tmp_path / f"{name}.npz")
+        assert "\n" not in str(info.value)
