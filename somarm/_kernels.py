@@ -3,6 +3,10 @@
 These kernels are the fast path of ``somarm.somq.SOMQ``. They do the same arithmetic in the
 same order as ``somarm.reference.ReferenceSOMQ`` (no fastmath), so both give bit-identical
 results. Units whose neighbourhood value is 0 are skipped: their update would add exactly 0.
+
+``wrap (action_dim,)`` bools mark the action dimensions treated as circles (``periodic_actions``):
+there the box's low and high are one point, actions wrap round instead of being clipped, and the
+action map moves along the shorter arc. Every other dimension runs the plain code, unchanged.
 """
 
 from __future__ import annotations
@@ -12,7 +16,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["all_finite", "nearest_unit", "perturbation", "act_kernel", "learn_kernel"]
+__all__ = ["all_finite", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -54,6 +58,22 @@ def perturbation(row, i, gaussian):
 
 
 @numba.njit(cache=True)
+def wrapped(value, low, high):
+    """``value`` moved by whole periods ``high - low`` into [low, high]; a value inside stays as it is."""
+    if low <= value <= high:
+        return value
+    period = high - low
+    value = value - period * math.floor((value - low) / period)
+    return min(max(value, low), high)  # rounding may land a hair outside
+
+
+@numba.njit(cache=True)
+def arc(difference, period):
+    """``difference`` moved by whole periods into [-period/2, period/2): the shorter way round a circle."""
+    return difference - period * math.floor(difference / period + 0.5)
+
+
+@numba.njit(cache=True)
 def _pull(weights, x, rate, psi):
     """The SOM update of one map towards ``x``: ``w += rate * psi * (x - w)`` where psi > 0, in place."""
     for m in range(weights.shape[0]):
@@ -65,10 +85,31 @@ def _pull(weights, x, rate, psi):
 
 
 @numba.njit(cache=True)
-def _shift(weights, k, target, rate, psi, low, high):
+def _pull_action(weights, x, rate, psi, wrap, low, high):
+    """``_pull`` of the action map: along the shorter arc, and wrapped back into the box, where ``wrap``."""
+    for m in range(weights.shape[0]):
+        if psi[m] > 0.0:
+            step = rate * psi[m]
+            for i in range(x.shape[0]):
+                w = weights[m, i]
+                if wrap[i]:
+                    weights[m, i] = wrapped(w + step * arc(x[i] - w, high[i] - low[i]), low[i], high[i])
+                else:
+                    weights[m, i] = w + step * (x[i] - w)
+
+
+@numba.njit(cache=True)
+def _shift(weights, k, target, rate, psi, low, high, wrap):
     """Move every unit by ``rate * psi * (target - w_k)`` where psi > 0, kept inside [low, high]: the
-    neighbourhood of unit k shifted by unit k's own SOM step, not pulled towards one point, in place."""
+    neighbourhood of unit k shifted by unit k's own SOM step, not pulled towards one point, in place.
+    Where ``wrap``: the step along the shorter arc, wrapped back into the box instead of clipped."""
     for i in range(target.shape[0]):
+        if wrap[i]:
+            delta = arc(target[i] - weights[k, i], high[i] - low[i])
+            for m in range(weights.shape[0]):
+                if psi[m] > 0.0:
+                    weights[m, i] = wrapped(weights[m, i] + rate * psi[m] * delta, low[i], high[i])
+            continue
         delta = target[i] - weights[k, i]
         for m in range(weights.shape[0]):
             if psi[m] > 0.0:
@@ -76,13 +117,13 @@ def _shift(weights, k, target, rate, psi, low, high):
 
 
 @numba.njit(cache=True)
-def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high,
+def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, wrap,
                gaussian, winners, units, actions):
     """Steps 1 to 5 for every trial; fills ``winners``, ``units`` and ``actions`` in place.
 
     Shapes: observations ``(n_trials, obs_dim)``, input_weights ``(n_trials, n_s, obs_dim)``,
     action_weights ``(n_trials, n_a, action_dim)``, q ``(n_trials, n_s, n_a)``, rows
-    ``(n_trials, width)``, epsilon/low/high ``(action_dim,)`` (epsilon per action dimension),
+    ``(n_trials, width)``, epsilon/low/high/wrap ``(action_dim,)`` (epsilon per action dimension),
     winners/units ``(n_trials,)``, actions
     ``(n_trials, action_dim)``.
     """
@@ -112,7 +153,10 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         for i in range(actions.shape[1]):
             noise = perturbation(row, i, gaussian)
             value = action_weights[trial, k, i] + noise * epsilon[i]
-            actions[trial, i] = min(max(value, low[i]), high[i])
+            if wrap[i]:
+                actions[trial, i] = wrapped(value, low[i], high[i])
+            else:
+                actions[trial, i] = min(max(value, low[i]), high[i])
         winners[trial] = j
         units[trial] = k
 
@@ -120,19 +164,23 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 @numba.njit(cache=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, winners, units, actions,
                  input_weights, action_weights, q, alpha, lambda_s, lambda_a, n_s, n_a,
-                 distances_s, distances_a, neighbourhood_q, shifted, low, high):
+                 distances_s, distances_a, neighbourhood_q, shifted, low, high, wrap):
     """Steps 6 to 9 for every trial, in place on the maps and the Q-table.
 
     ``bootstrap[trial]`` says whether to add ``gamma * max_i Q(s'_j, a_i)`` (s'_j the winner of
     ``next_observations[trial]`` before this step's input-map update). Step 7 pulls the action
     map towards ``actions[trial]``, or (``shifted[trial]``, an interpolated greedy step) moves
     unit k's neighbourhood by unit k's step towards it, kept inside the action bounds ``low``,
-    ``high`` (``somarm.interpolation``; a shift, unlike a pull, could leave them).
+    ``high`` (``somarm.interpolation``; a shift, unlike a pull, could leave them). Dimensions
+    marked in ``wrap`` move along the shorter arc and wrap round.
     """
     n_units_s = q.shape[1]
     n_units_a = q.shape[2]
     psi_s = np.empty(n_units_s)
     psi_a = np.empty(n_units_a)
+    wrapping = False
+    for i in range(wrap.shape[0]):
+        wrapping = wrapping or wrap[i]
     for trial in range(rewards.shape[0]):
         j = winners[trial]
         k = units[trial]
@@ -151,7 +199,9 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
         # Step 7: the action map learns only if the perturbed action looks like an improvement.
         if target > q[trial, j, k]:
             if shifted[trial]:
-                _shift(action_weights[trial], k, actions[trial], lambda_a, psi_a, low, high)
+                _shift(action_weights[trial], k, actions[trial], lambda_a, psi_a, low, high, wrap)
+            elif wrapping:
+                _pull_action(action_weights[trial], actions[trial], lambda_a, psi_a, wrap, low, high)
             else:
                 _pull(action_weights[trial], actions[trial], lambda_a, psi_a)
         # Step 8: neighbourhood Q-learning, or the winning pair alone.

@@ -75,7 +75,7 @@ def ladder(samples: int) -> list[int]:
 
 def _bounds(task) -> dict[str, np.ndarray]:
     return dict(observation_low=task.observation_low, observation_high=task.observation_high,
-                action_low=task.action_low, action_high=task.action_high)
+                action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic)
 
 
 def task_defaults(task: str) -> tuple[str, int]:

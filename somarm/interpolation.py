@@ -37,6 +37,11 @@ as well defined as in the paper, and steps 8 (neighbourhood Q-learning towards t
   greedy error 0.029 with the pull, 0.017 with the shift. Exploring steps keep the paper's pull,
   which orders the map while it forms. Shifted units stay inside the action bounds.
 
+Periodic action dimensions (``wrap``, the task's joint angles with ``periodic_actions``): each
+blended unit's action is first taken to the copy (whole turns apart) nearest the winner's greedy
+action, so a blend across the box's edge stays between the two, and the result, the perturbed
+action and the corrected target wrap round into the box instead of being clipped.
+
 Random numbers: the same row as the winner response, ``[explore?, random unit, tie-break,
 noise...]``; every greedy choice here breaks ties with the row's tie-break number.
 """
@@ -48,7 +53,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernels import nearest_unit, perturbation
+from ._kernels import arc, nearest_unit, perturbation, wrapped
 
 __all__ = ["MAX_JUMP", "NEIGHBOUR_SHARE", "n_basis_for", "act_kernel", "predict_kernel"]
 
@@ -138,7 +143,7 @@ def _exploring_unit(q_row, u, tie, distances_a):
 
 
 @numba.njit(cache=True)
-def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, order, squared,
+def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, wrap, order, squared,
               beta, units, out):
     """The blended greedy action of one trial into ``out``; returns (winner j, its greedy unit k)."""
     _nearest(x, input_weights, order, squared)
@@ -171,6 +176,14 @@ def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, lo
         kept += beta[i]
     for d in range(out.shape[0]):
         value = 0.0
+        if wrap[d]:
+            base = action_weights[k, d]
+            period = high[d] - low[d]
+            for i in range(n_used):
+                if beta[i] > 0.0:
+                    value += (beta[i] / kept) * (base + arc(action_weights[units[i], d] - base, period))
+            out[d] = wrapped(value, low[d], high[d])
+            continue
         for i in range(n_used):
             if beta[i] > 0.0:
                 value += (beta[i] / kept) * action_weights[units[i], d]
@@ -179,13 +192,14 @@ def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, lo
 
 
 @numba.njit(cache=True)
-def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, gaussian,
+def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, wrap, gaussian,
                distances_a, n_basis, winners, units, actions, targets, shifted):
     """Steps 1 to 5 with the interpolated response, for every trial, in place.
 
     Shapes as ``somarm._kernels.act_kernel``, plus ``distances_a (n_a, n_a)`` and ``targets
     (n_trials, action_dim)``: ``actions`` receives the perturbed actions a' (the output) and
-    ``targets`` the corrected step-7 targets ``u_k + (a' - a)``, both inside the bounds.
+    ``targets`` the corrected step-7 targets ``u_k + (a' - a)``, both inside the bounds (wrapped
+    round where ``wrap``).
     """
     size = min(n_basis + 1, input_weights.shape[1])
     order = np.empty(size, dtype=np.int64)
@@ -204,10 +218,16 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
                 proposal[i] = action_weights[trial, k, i]
         else:
             j, k = _response(observations[trial], input_weights[trial], action_weights[trial], q[trial],
-                             row[2], distances_a, n_basis, low, high, order, squared, beta, blended_units,
-                             proposal)
+                             row[2], distances_a, n_basis, low, high, wrap, order, squared, beta,
+                             blended_units, proposal)
         for i in range(actions.shape[1]):
             noise = perturbation(row, i, gaussian)
+            if wrap[i]:
+                value = wrapped(proposal[i] + noise * epsilon[i], low[i], high[i])
+                actions[trial, i] = value
+                target = value + arc(action_weights[trial, k, i] - proposal[i], high[i] - low[i])
+                targets[trial, i] = wrapped(target, low[i], high[i])
+                continue
             value = min(max(proposal[i] + noise * epsilon[i], low[i]), high[i])
             actions[trial, i] = value
             target = value + (action_weights[trial, k, i] - proposal[i])
@@ -217,7 +237,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 
 
 @numba.njit(cache=True)
-def predict_kernel(observations, input_weights, action_weights, q, distances_a, n_basis, low, high, out):
+def predict_kernel(observations, input_weights, action_weights, q, distances_a, n_basis, low, high, wrap, out):
     """Greedy interpolated responses, ties to the lowest index: observations ``(n_trials, n_obs,
     obs_dim)`` -> ``out (n_trials, n_obs, action_dim)``."""
     size = min(n_basis + 1, input_weights.shape[1])
@@ -228,5 +248,5 @@ def predict_kernel(observations, input_weights, action_weights, q, distances_a, 
     for trial in range(observations.shape[0]):
         for o in range(observations.shape[1]):
             _response(observations[trial, o], input_weights[trial], action_weights[trial], q[trial], 0.0,
-                      distances_a, n_basis, low, high, order, squared, beta, blended_units, out[trial, o])
+                      distances_a, n_basis, low, high, wrap, order, squared, beta, blended_units, out[trial, o])
 

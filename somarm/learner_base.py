@@ -23,7 +23,7 @@ from .learner_file import read_file, restore
 from .schedules import Schedule, parse_bool, parse_decay, parse_shape
 from .som import grid_coordinates, grid_distances, map_shape
 from .streams import PURPOSES, UniformStreams, trial_ids_for
-from .validation import check_bounds, check_int, check_memory, check_number, real_array
+from .validation import check_bounds, check_int, check_memory, check_number, check_periodic, real_array
 
 __all__ = [
     "LearnerBase",
@@ -84,7 +84,7 @@ def validate_common(config: Any, *, probabilities: tuple[str, ...] = ()) -> None
             # A rate above 1 overshoots its target: a SOM unit lands beyond the vector it moves to.
             raise ValueError(f"{name} is a learning rate and must lie in [0, 1], got {value!r}")
     set_field(config, "gamma", check_number("gamma", config.gamma, minimum=0.0, maximum=1.0))
-    for name in ("neighbourhood_q", "neighbourhood_values", "epsilon_relative"):
+    for name in ("neighbourhood_q", "neighbourhood_values", "epsilon_relative", "periodic_actions"):
         if hasattr(config, name) and not isinstance(getattr(config, name), bool):
             raise ValueError(f"{name} must be True or False, got {getattr(config, name)!r}")
     if config.noise not in ("uniform", "gaussian"):
@@ -224,7 +224,7 @@ class LearnerBase(abc.ABC):
     _OPTIONAL_ARRAYS: tuple[str, ...] = ()
 
     def __init__(self, config, *, observation_low, observation_high, action_low, action_high,
-                 n_trials: int = 1, seed: int = 0, trial_ids=None):
+                 n_trials: int = 1, seed: int = 0, trial_ids=None, action_periodic=None):
         if not isinstance(config, self.config_class):
             raise ValueError(f"config must be a {self.config_class.__name__}, got {type(config).__name__}")
         self.config = config
@@ -235,6 +235,8 @@ class LearnerBase(abc.ABC):
         self.seed = check_int("seed", seed, minimum=0)
         self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
         self.obs_dim, self.action_dim = self.observation_low.size, self.action_low.size
+        # The task's angles: dimensions whose low and high are one point (used where a config says so).
+        self.action_periodic = check_periodic(action_periodic, self.action_dim)
         self._check_sizes()
         self.t = 0
         self.input_grid, self._distances_s = self._grid(config.input_shape)

@@ -1,6 +1,7 @@
 """The learner file format: one ``.npz`` of arrays plus a JSON ``meta`` string, checked on reading.
 
-``meta`` holds the kind, config, bounds, seed, trial ids, step count and random-stream positions
+``meta`` holds the kind, config, bounds, periodic action dimensions (files written before
+them lack the key: none periodic), seed, trial ids, step count and random-stream positions
 (``LearnerBase.save`` writes it). A damaged file (valid npz, wrong contents) is refused in one
 line naming the file and the key, never with a KeyError or TypeError from deep inside a load.
 """
@@ -42,6 +43,7 @@ def write(learner: Any, path: str | os.PathLike, arrays: dict[str, np.ndarray]) 
         "config": learner.config.to_dict(),
         "bounds": [b.tolist() for b in (learner.observation_low, learner.observation_high,
                                         learner.action_low, learner.action_high)],
+        "periodic": learner.action_periodic.tolist(),
         "n_trials": learner.n_trials,
         "seed": learner.seed,
         "trial_ids": learner.trial_ids.tolist(),
@@ -117,7 +119,8 @@ def _restore(cls: type, meta: dict[str, Any], arrays: dict[str, np.ndarray], pat
     low_s, high_s, low_a, high_a = meta["bounds"]
     learner = cls(cls.config_class.from_dict(meta["config"]), observation_low=low_s,
                   observation_high=high_s, action_low=low_a, action_high=high_a,
-                  n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
+                  n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"],
+                  action_periodic=meta.get("periodic"))
     for name in cls._STATE_ARRAYS + cls._PENDING_ARRAYS + ("stream_buffer",):
         if name not in arrays and name not in cls._OPTIONAL_ARRAYS:
             raise ValueError(f"{path} is a damaged learner file: array {name!r} is missing")

@@ -52,6 +52,7 @@ class BatchedTask(Protocol):
     observation_high: np.ndarray  #: (obs_dim,)
     action_low: np.ndarray  #: (action_dim,)
     action_high: np.ndarray  #: (action_dim,)
+    action_periodic: np.ndarray  #: (action_dim,) bools: angles whose low and high are one pose
 
     def reset(self) -> np.ndarray:
         """Start a new episode in every trial; returns observations ``(n_trials, obs_dim)``."""

@@ -9,6 +9,10 @@ from the trial's ``UniformStreams`` row, laid out as
 
 (two noise numbers per dimension for Gaussian noise). Sums and products are written in the
 same order as the kernel so that floating point rounds the same way.
+
+With ``periodic_actions`` the action dimensions the task declares periodic are circles: where
+the paper clips an action into its bounds, it wraps round, and where it moves an action unit by
+a difference, the difference is taken the shorter way round and the unit wraps back into the box.
 """
 
 from __future__ import annotations
@@ -22,10 +26,28 @@ from .learner_base import initial_generator
 from .som import grid_coordinates, grid_distances, neighbourhood
 from .somq import SOMQConfig, row_width
 from .streams import UniformStreams, trial_ids_for
-from .validation import check_array, check_bounds
+from .validation import check_array, check_bounds, check_periodic
 
 __all__ = ["ReferenceSOMQ"]
 
+
+def _wrapped(value: float, low: float, high: float) -> float:
+    """``value`` moved by whole periods (high - low) into [low, high]; a value inside stays as it is."""
+    if low <= value <= high:
+        return value
+    period = high - low
+    value = value - period * math.floor((value - low) / period)
+    return min(max(value, low), high)
+
+
+def _arc(difference: float, period: float) -> float:
+    """``difference`` moved by whole periods into [-period/2, period/2): the shorter way round."""
+    return difference - period * math.floor(difference / period + 0.5)
+
+
+def _into_box(value: float, low: float, high: float, wrap: bool) -> float:
+    """The paper's "keep inside the bounds": clip, or on a circle wrap round."""
+    return _wrapped(value, low, high) if wrap else min(max(value, low), high)
 
 
 def _winner(weights: np.ndarray, x: np.ndarray) -> int:
@@ -60,8 +82,11 @@ def exploring_unit(q_row: np.ndarray, u: float, tie: float, distances_a: np.ndar
     return neighbours[min(int(u / NEIGHBOUR_SHARE * len(neighbours)), len(neighbours) - 1)]
 
 
-def interpolated_response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high):
+def interpolated_response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, wrap=None):
     """The interpolated greedy response (``somarm.interpolation``), written out plainly.
+
+    ``wrap`` marks the periodic action dimensions (default none): there each blended action is
+    taken to its copy nearest the winner's greedy action before blending, and the blend wraps round.
 
     Returns:
       ``(j, k, response)``: the winning input unit, its greedy action unit, the blended action.
@@ -98,11 +123,16 @@ def interpolated_response(x, input_weights, action_weights, q, tie, distances_a,
         kept += beta[i]
     response = np.empty(action_weights.shape[1])
     for d in range(response.size):
+        periodic = wrap is not None and bool(wrap[d])
         value = 0.0
         for i in range(n_used):
             if beta[i] > 0.0:
-                value += (beta[i] / kept) * action_weights[units[i], d]
-        response[d] = min(max(value, low[d]), high[d])
+                unit = action_weights[units[i], d]
+                if periodic:  # the copy of the unit's angle nearest the winner's greedy angle
+                    base = action_weights[k, d]
+                    unit = base + _arc(unit - base, high[d] - low[d])
+                value += (beta[i] / kept) * unit
+        response[d] = _into_box(value, low[d], high[d], periodic)
     return order[0], k, response
 
 
@@ -115,14 +145,18 @@ class ReferenceSOMQ:
       action_low, action_high: the action box ``(action_dim,)``; perturbed actions are kept inside.
       seed: the run's seed.
       trial_id: which trial of the run this agent is (its random stream).
+      action_periodic: which action dimensions are angles (default none); circles if the config's
+        ``periodic_actions`` says so.
     """
 
     def __init__(self, config: SOMQConfig, *, observation_low, observation_high, action_low, action_high,
-                 seed: int = 0, trial_id: int = 0):
+                 seed: int = 0, trial_id: int = 0, action_periodic=None):
         self.config = config
         self.observation_low, self.observation_high = check_bounds("observation", observation_low,
                                                                    observation_high)
         self.action_low, self.action_high = check_bounds("action", action_low, action_high)
+        periodic = check_periodic(action_periodic, self.action_low.size)
+        self.wrap = [bool(periodic[i]) and config.periodic_actions for i in range(periodic.size)]
         ids = trial_ids_for(1, [trial_id])
         self.streams = UniformStreams(seed, ids, "learner", row_width(config, self.action_low.size))
         self.distances_s = grid_distances(grid_coordinates(config.input_shape))
@@ -163,9 +197,9 @@ class ReferenceSOMQ:
             # ... or, interpolated, the blend of the nearest input units' greedy actions.
             j, k, proposed = interpolated_response(x, self.input_weights, self.action_weights, self.q, row[2],
                                                    self.distances_a, n_basis_for(cfg.input_shape),
-                                                   self.action_low, self.action_high)
+                                                   self.action_low, self.action_high, self.wrap)
         # Step 4: perturb each element by random(-1, 1) * epsilon (or Gaussian * epsilon) and keep
-        # the result inside the action bounds.
+        # the result inside the action bounds (clipped, or wrapped round a periodic dimension).
         epsilon = cfg.epsilon.value(t)
         span = self.action_high - self.action_low
         perturbed = np.empty_like(proposed)
@@ -177,13 +211,15 @@ class ReferenceSOMQ:
                 noise = 2.0 * row[3 + i] - 1.0
             scale = epsilon * span[i] if cfg.epsilon_relative else epsilon
             value = proposed[i] + noise * scale
-            perturbed[i] = min(max(value, self.action_low[i]), self.action_high[i])
+            perturbed[i] = _into_box(value, self.action_low[i], self.action_high[i], self.wrap[i])
         # Step 7's target for unit a_k: where u_k would have to be for the proposal to have been the
         # perturbed action (the perturbed action itself when the proposal is u_k).
         target = np.empty_like(perturbed)
         for i in range(perturbed.size):
-            value = perturbed[i] + (self.action_weights[k, i] - proposed[i])
-            target[i] = min(max(value, self.action_low[i]), self.action_high[i])
+            offset = self.action_weights[k, i] - proposed[i]
+            if self.wrap[i]:
+                offset = _arc(offset, self.action_high[i] - self.action_low[i])
+            target[i] = _into_box(perturbed[i] + offset, self.action_low[i], self.action_high[i], self.wrap[i])
         if cfg.response == "winner":
             target = perturbed
         self._last = (x, j, k, target, explored)
@@ -205,11 +241,20 @@ class ReferenceSOMQ:
         # of pulled towards one point, so that neighbours keep their own places.
         if target > self.q[j, k]:
             rates = cfg.lambda_a.value(t) * neighbourhood(self.distances_a[k], cfg.n_a.value(t))
-            if cfg.response == "interpolated" and not explored:
-                shifted = self.action_weights + rates[:, None] * (target_k - self.action_weights[k])
-                self.action_weights = np.clip(shifted, self.action_low, self.action_high)
-            else:
-                self.action_weights += rates[:, None] * (target_k - self.action_weights)
+            shift = cfg.response == "interpolated" and not explored
+            for i in range(target_k.size):
+                low, high, period = self.action_low[i], self.action_high[i], self.action_high[i] - self.action_low[i]
+                column = self.action_weights[:, i]  # a view: changed in place
+                if not self.wrap[i] and shift:
+                    column[:] = np.clip(column + rates * (target_k[i] - column[k]), low, high)
+                elif not self.wrap[i]:
+                    column += rates * (target_k[i] - column)
+                elif shift:  # on a circle: unit a_k's step the shorter way round, every unit wrapped
+                    delta = _arc(target_k[i] - column[k], period)
+                    column[:] = [_wrapped(w + rate * delta, low, high) for w, rate in zip(column, rates, strict=True)]
+                else:
+                    column[:] = [_wrapped(w + rate * _arc(target_k[i] - w, period), low, high)
+                                 for w, rate in zip(column, rates, strict=True)]
         # Step 8: neighbourhood Q-learning (or only the winning pair, -NL).
         alpha = cfg.alpha.value(t)
         psi_s = neighbourhood(self.distances_s[j], cfg.n_s.value(t))

@@ -63,7 +63,8 @@ def make_task(config: RunConfig, trial_ids: np.ndarray | None = None) -> Batched
 
 
 def make_learner(config: RunConfig, task: BatchedTask) -> Learner:
-    """The learner of a (resolved) run config, reading the task's observation and action bounds."""
+    """The learner of a (resolved) run config, reading the task's observation and action boxes (bounds
+    and periodic action dimensions)."""
     from somarm import learners, presets
 
     learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
@@ -74,6 +75,7 @@ def make_learner(config: RunConfig, task: BatchedTask) -> Learner:
         observation_high=task.observation_high,
         action_low=task.action_low,
         action_high=task.action_high,
+        action_periodic=task.action_periodic,
         n_trials=config.n_trials,
         seed=config.seed,
         trial_ids=config.trial_ids_array(),

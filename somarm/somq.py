@@ -12,6 +12,10 @@ action boxes, observations, actions and rewards. Rules where the paper is brief:
 - epsilon is in action units, as Table 1 reads literally; ``epsilon_relative=True`` reads it as a
   fraction of each action range instead (the paper plots angles normalised to [0, 1], and with
   that reading Table 1's 0.1 becomes 0.63 rad; which one the paper used is not stated).
+- ``periodic_actions=True`` treats the action dimensions the task declares periodic (its joint
+  angles: theta and theta + 2 pi are one pose) as circles: perturbed actions wrap round instead
+  of being clipped, and the action map moves along the shorter arc and wraps back into the box.
+  Off by default (the paper's box); it changes nothing where the task declares no periodic dimension.
 - delayed reward (gamma > 0): s'_j is the winner of the next observation before this step's
   input-map update; terminal trials use the reward alone.
 - ``predict`` is greedy: the best Q for the winning input unit, ties to the lowest index, no
@@ -81,6 +85,10 @@ class SOMQConfig(ConfigBase):
     """Greedy response: ``winner`` (the paper's: the best action unit of the winning input unit) or
     ``interpolated`` (a blend over the nearest input units' greedy actions; ``somarm.interpolation``)."""
 
+    periodic_actions: bool = False
+    """Treat the action dimensions the task declares periodic (joint angles) as circles: wrap round
+    instead of clipping, and move the action map along the shorter arc (False: the paper's box)."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -105,6 +113,8 @@ class SOMQ(LearnerBase):
       seed: the run's seed; trial i's numbers depend only on (seed, trial_ids[i]).
       trial_ids: which trials of the run these are (default ``range(n_trials)``); ``[7]``
         replays trial 7 of a batch alone.
+      action_periodic: which action dimensions are angles whose low and high are one point,
+        ``(action_dim,)`` bools (default none); wrapped only with ``config.periodic_actions``.
 
     Raises:
       ValueError: a bad config, bounds, ``n_trials``, ``seed`` or ``trial_ids`` (one line).
@@ -126,6 +136,7 @@ class SOMQ(LearnerBase):
         self.q = np.zeros((self.n_trials, n_s, n_a))
         self._open_streams(row_width(cfg, self.action_dim))
         self._interpolated = cfg.response == "interpolated"
+        self._wrap = self.action_periodic & cfg.periodic_actions  # all False: the paper's clipped box
         self._n_basis = interpolation.n_basis_for(cfg.input_shape)
         # With the interpolated response ``_actions`` holds step 7's corrected targets, these the output.
         self._outputs = np.zeros((self.n_trials, self.action_dim))
@@ -144,7 +155,8 @@ class SOMQ(LearnerBase):
           observations: ``(n_trials, obs_dim)``, finite.
 
         Returns:
-          Perturbed actions ``(n_trials, action_dim)`` inside the action bounds (a fresh array).
+          Perturbed actions ``(n_trials, action_dim)`` inside the action bounds (a fresh array;
+          wrapped round, not clipped, in the periodic dimensions with ``periodic_actions``).
 
         Raises:
           ValueError: wrong shape, NaN or inf; or the previous act() still waits for its learn().
@@ -159,7 +171,7 @@ class SOMQ(LearnerBase):
         if self._interpolated:
             interpolation.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, rows, values["p"],
-                self._epsilons(values["epsilon"]), self.action_low, self.action_high,
+                self._epsilons(values["epsilon"]), self.action_low, self.action_high, self._wrap,
                 self.config.noise == "gaussian", self._distances_a, self._n_basis, self._winners,
                 self._units, self._outputs, self._actions, self._shifted,
             )
@@ -167,7 +179,7 @@ class SOMQ(LearnerBase):
             return self._outputs.copy()
         _kernels.act_kernel(
             self._observations, self.input_weights, self.action_weights, self.q, rows,
-            values["p"], self._epsilons(values["epsilon"]), self.action_low, self.action_high,
+            values["p"], self._epsilons(values["epsilon"]), self.action_low, self.action_high, self._wrap,
             self.config.noise == "gaussian", self._winners, self._units, self._actions,
         )
         self._pending = True
@@ -195,7 +207,7 @@ class SOMQ(LearnerBase):
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
             values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
             self._distances_s, self._distances_a, self.config.neighbourhood_q, self._shifted,
-            self.action_low, self.action_high,
+            self.action_low, self.action_high, self._wrap,
         )
         self._pending = False
         self.t += 1
@@ -229,7 +241,7 @@ class SOMQ(LearnerBase):
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             interpolation.predict_kernel(np.ascontiguousarray(many), self.input_weights, self.action_weights,
                                          self.q, self._distances_a, self._n_basis, self.action_low,
-                                         self.action_high, out)
+                                         self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
         _, units = self.greedy_units(observations)
         index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))

@@ -33,7 +33,7 @@ from . import learner_file
 from .learner_base import ConfigBase, override_config
 from .schedules import InverseDecay, Schedule
 from .streams import UniformStreams, trial_ids_for
-from .validation import check_bounds, check_int, check_number
+from .validation import check_bounds, check_int, check_number, check_periodic
 
 __all__ = ["TabularConfig", "TabularQ", "MAX_TABLE_ENTRIES"]
 
@@ -115,6 +115,7 @@ class TabularQ:
       config: a ``TabularConfig``.
       observation_low, observation_high: the observation box, ``(obs_dim,)`` each.
       action_low, action_high: the action box, ``(action_dim,)`` each.
+      action_periodic: which action dimensions are angles, ``(action_dim,)`` bools (saved, not used).
       n_trials: independent trials advanced together (>= 1).
       seed: the run's seed. trial_ids: which trials of the run these are (``[7]`` replays trial 7).
 
@@ -127,13 +128,15 @@ class TabularQ:
     _ARRAYS = ("q", "counts", "_cells", "_choices")
 
     def __init__(self, config: TabularConfig, *, observation_low, observation_high, action_low, action_high,
-                 n_trials: int = 1, seed: int = 0, trial_ids=None):
+                 n_trials: int = 1, seed: int = 0, trial_ids=None, action_periodic=None):
         if not isinstance(config, TabularConfig):
             raise ValueError(f"config must be a TabularConfig, got {type(config).__name__}")
         self.config = config
         self.observation_low, self.observation_high = check_bounds("observation", observation_low,
                                                                    observation_high)
         self.action_low, self.action_high = check_bounds("action", action_low, action_high)
+        # Kept for the file only: the grid's cells are the same whether or not an angle wraps.
+        self.action_periodic = check_periodic(action_periodic, self.action_low.size)
         self.n_trials = check_int("n_trials", n_trials)
         self.seed = check_int("seed", seed, minimum=0)
         self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
@@ -264,7 +267,8 @@ class TabularQ:
         try:
             learner = cls(TabularConfig.from_dict(meta["config"]), observation_low=low_s,
                           observation_high=high_s, action_low=low_a, action_high=high_a,
-                          n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"])
+                          n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"],
+                          action_periodic=meta.get("periodic"))
             for name in cls._ARRAYS:
                 getattr(learner, name)[...] = arrays[name]
         except (TypeError, ValueError) as exc:

@@ -15,6 +15,7 @@ __all__ = [
     "check_number",
     "check_array",
     "check_bounds",
+    "check_periodic",
     "check_memory",
     "real_array",
 ]
@@ -142,3 +143,20 @@ def check_bounds(name: str, low: object, high: object) -> tuple[np.ndarray, np.n
     if not (low_arr < high_arr).all():
         raise ValueError(f"{name} bounds need low < high in every dimension, got {low_arr} and {high_arr}")
     return low_arr, high_arr
+
+
+def check_periodic(value: object, size: int) -> np.ndarray:
+    """Which dimensions of a box are periodic: ``(size,)`` bools; None means none of them.
+
+    A periodic dimension's low and high are the same point (a joint angle in [-pi, pi]), so
+    ``high - low`` is one period.
+
+    Raises:
+      ValueError: not ``size`` booleans (one line).
+    """
+    if value is None:
+        return np.zeros(size, dtype=np.bool_)
+    array = np.asarray(value)
+    if array.shape != (size,) or array.dtype != np.bool_:
+        raise ValueError(f"action_periodic must be {size} booleans (one per action dimension), got {value!r:.60}")
+    return array.copy()

@@ -92,6 +92,14 @@ class OneStepTask:
     def action_dim(self) -> int:
         return int(self.action_low.size)
 
+    @property
+    def action_periodic(self) -> np.ndarray:
+        """Which action dimensions are angles whose low and high are one pose, ``(action_dim,)`` bools.
+
+        None by default; a task whose actions are joint angles over one full turn says so.
+        """
+        return np.zeros(self.action_dim, dtype=np.bool_)
+
     def set_step(self, t: int) -> None:
         """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase).
 

@@ -81,6 +81,11 @@ class FourGoals(OneStepTask):
         self.action_low, self.action_high = np.full(2, -np.pi), np.full(2, np.pi)
         super().__init__(params, **kwargs)
 
+    @property
+    def action_periodic(self) -> np.ndarray:
+        """Both joint angles: [-pi, pi] is one turn, so -pi and pi are the same pose."""
+        return np.ones(self.n_links, dtype=np.bool_)
+
     def goals_for(self, observations: np.ndarray) -> np.ndarray:
         """The goal ``(..., 2)`` of each observation in the current phase."""
         return self.params.goals(self.t)[quadrants(observations)]

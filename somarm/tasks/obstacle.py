@@ -102,6 +102,7 @@ class Obstacle:
         self._generators = trial_generators(seed, self.trial_ids, "task")
         self.observation_low, self.observation_high = np.full(2, -np.pi), np.full(2, np.pi)
         self.action_low, self.action_high = np.full(2, -params.max_step), np.full(2, params.max_step)
+        self.action_periodic = np.zeros(2, dtype=np.bool_)  #: the actions are angle steps, not angles
         self.control_steps = actuation.steps_of(params.control_interval, arms.TIMESTEP)
         self._qpos = np.zeros((self.n_trials, 2))
         self._qvel = np.zeros((self.n_trials, 2))

@@ -103,6 +103,11 @@ class Reach(OneStepTask):
         super().__init__(params, **kwargs)
 
     @property
+    def action_periodic(self) -> np.ndarray:
+        """Every joint angle: [-pi, pi] is one turn, so -pi and pi are the same pose."""
+        return np.ones(self.n_links, dtype=np.bool_)
+
+    @property
     def actuated(self) -> bool:
         return self.params.dynamics == "actuated"
 
