@@ -111,22 +111,33 @@ def _config(input_shape, neighbourhood_q, gamma, noise="uniform"):
     )
 
 
+def _arc(difference, period):
+    return difference - period * np.floor(difference / period + 0.5)
+
+
 @pytest.mark.parametrize("input_shape", [(6,), (3, 4), (1,)], ids=["1d", "2d", "one-unit"])
 @pytest.mark.parametrize("neighbourhood_q,gamma,noise", [(True, 0.0, "uniform"), (False, 0.9, "gaussian")],
                          ids=["NL", "noNL-delayed-gaussian"])
-def test_batched_equals_reference_exactly(input_shape, neighbourhood_q, gamma, noise):
-    config = _config(input_shape, neighbourhood_q, gamma, noise)
-    batched = SOMQ(config, n_trials=3, seed=5, **BOUNDS)
-    references = [ReferenceSOMQ(config, seed=5, trial_id=i, **BOUNDS) for i in range(3)]
+@pytest.mark.parametrize("periodic", [False, True], ids=["box", "circles"])
+def test_batched_equals_reference_exactly(input_shape, neighbourhood_q, gamma, noise, periodic):
+    config = dataclasses.replace(_config(input_shape, neighbourhood_q, gamma, noise), periodic_actions=periodic)
+    # With circles, action dimensions 0 and 2 wrap round (their low and high are one point).
+    angles = [True, False, True] if periodic else None
+    batched = SOMQ(config, n_trials=3, seed=5, action_periodic=angles, **BOUNDS)
+    references = [ReferenceSOMQ(config, seed=5, trial_id=i, action_periodic=angles, **BOUNDS) for i in range(3)]
     rng = np.random.default_rng(7)
     observations = rng.uniform([0, -1], [1, 1], (3, 2))
-    shifted = 0
+    shifted = wrapped = 0
     for step in range(150):
         actions = batched.act(observations)
         shifted += int(batched._shifted.sum())
         expected = np.stack([ref.act(observations[i]) for i, ref in enumerate(references)])
         np.testing.assert_array_equal(actions, expected, err_msg=f"actions differ at step {step}")
         rewards = -np.abs(actions[:, 0] - observations[:, 0]) - np.abs(actions[:, 1] + observations[:, 1])
+        if periodic:  # best near the edges of the circles, so that actions and units go round them
+            rewards = (-np.abs(_arc(actions[:, 0] - 0.95, 2.0)) - np.abs(actions[:, 1] - observations[:, 0])
+                       - np.abs(_arc(actions[:, 2] + 1.9, 4.0)))
+            wrapped += int((actions[:, 0] < -0.5).sum() + (actions[:, 2] > 1.0).sum())
         next_observations = rng.uniform([0, -1], [1, 1], (3, 2))
         terminal = rng.random(3) < 0.3
         batched.learn(rewards, next_observations, terminal)
@@ -142,9 +153,10 @@ def test_batched_equals_reference_exactly(input_shape, neighbourhood_q, gamma, n
         for o in range(20):
             _, _, response = interpolated_response(probes[i, o], ref.input_weights, ref.action_weights, ref.q,
                                                    0.0, ref.distances_a, interpolation.n_basis_for(input_shape),
-                                                   ref.action_low, ref.action_high)
+                                                   ref.action_low, ref.action_high, ref.wrap)
             np.testing.assert_array_equal(predicted[i, o], response)
     assert shifted > 100  # most steps were interpolated greedy steps
+    assert wrapped > 20 or not periodic  # many actions came out across an edge
 
 
 def test_trial_alone_equals_trial_in_batch_and_resume_equals_uninterrupted(tmp_path):

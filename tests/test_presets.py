@@ -20,12 +20,13 @@ def test_every_table_is_available_by_name_with_a_description():
         assert presets.PRESETS[name].config is presets.get(name)
 
 
-def test_plus_presets_change_only_schedules_of_their_table():
-    for name, changed in (("table1+", {"lambda_a"}), ("table5+", set(SOMQConfig.SCHEDULES))):
+def test_plus_presets_change_only_schedules_of_their_table_and_table1_plus_the_circles():
+    for name, changed in (("table1+", {"lambda_a", "periodic_actions"}), ("table5+", set(SOMQConfig.SCHEDULES))):
         base, plus = presets.get(name[:-1]).to_dict(), presets.get(name).to_dict()
         assert {key for key in base if base[key] != plus[key]} == changed
         assert plus["response"] == "winner"
-    assert presets.get("table1+").lambda_a.value(10**6) == 0.1
+    assert presets.get("table1+").lambda_a.value(10**6) == 0.1 and presets.get("table1+").periodic_actions
+    assert any("periodic_actions" in choice for choice in presets.PRESETS["table1+"].choices)
     assert presets.get("table5+").epsilon.value(10**6) == 0.02
 
 

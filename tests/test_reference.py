@@ -80,3 +80,37 @@ def test_relative_epsilon_equals_reference_exactly():
     for i, ref in enumerate(references):
         np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
         np.testing.assert_array_equal(batched.q[i], ref.q)
+
+
+#: Dimensions 0 and 2 as circles (their low and high one point), dimension 1 a plain interval.
+PERIODIC = [True, False, True]
+
+
+def _arc(difference, period):
+    return difference - period * np.floor(difference / period + 0.5)
+
+
+@pytest.mark.parametrize("noise", ["uniform", "gaussian"])
+def test_periodic_actions_equal_reference_exactly(noise):
+    config = dataclasses.replace(_config((5,), True, 0.0, noise=noise), periodic_actions=True)
+    batched = SOMQ(config, n_trials=3, seed=2, action_periodic=PERIODIC, **BOUNDS)
+    references = [ReferenceSOMQ(config, seed=2, trial_id=i, action_periodic=PERIODIC, **BOUNDS) for i in range(3)]
+    rng = np.random.default_rng(5)
+    wrapped = 0
+    for step in range(150):
+        observations = rng.uniform([0, -1], [1, 1], (3, 2))
+        actions = batched.act(observations)
+        expected = np.stack([ref.act(observations[i]) for i, ref in enumerate(references)])
+        np.testing.assert_array_equal(actions, expected, err_msg=f"actions differ at step {step}")
+        # Best near the top edge of dimension 0 (0.95 of [-1, 1]) and the bottom of dimension 2: the
+        # perturbations and the units go round the edges.
+        wrapped += int((actions[:, 0] < -0.5).sum() + (actions[:, 2] > 1.0).sum())
+        rewards = (-np.abs(_arc(actions[:, 0] - 0.95, 2.0)) - np.abs(actions[:, 1] - observations[:, 0])
+                   - np.abs(_arc(actions[:, 2] + 1.9, 4.0)))
+        batched.learn(rewards)
+        for i, ref in enumerate(references):
+            ref.learn(rewards[i])
+    for i, ref in enumerate(references):
+        np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
+        np.testing.assert_array_equal(batched.q[i], ref.q)
+    assert wrapped > 20  # many actions came out across an edge

@@ -46,6 +46,16 @@ def test_batched_task_invariants(name):
     assert ((fresh >= task.observation_low) & (fresh <= task.observation_high)).all()
 
 
+@pytest.mark.parametrize("name", tasks.names())
+def test_periodic_action_dimensions_are_the_joint_angles_over_one_turn(name):
+    task = tasks.make(name, n_trials=1)
+    periodic = task.action_periodic
+    assert periodic.dtype == np.bool_ and periodic.shape == task.action_low.shape
+    assert periodic.all() == (name in ("reach2", "reach20", "four_goals")) and (periodic.all() or not periodic.any())
+    span = task.action_high - task.action_low
+    np.testing.assert_allclose(span[periodic], 2 * np.pi)  # a periodic dimension is one whole turn
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_same_seed_same_observations_different_seed_different(name):
     def first_three(seed, **kw):
