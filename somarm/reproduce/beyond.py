@@ -3,8 +3,9 @@
 Not one of the paper's experiments: its section 6 only suggests "a truly continuous response by
 interpolating over the Q-table". Both responses learn side by side (in lockstep, same
 observations and random numbers) on reach2, reach20, four_goals and throw_distance, under the
-paper's table and, where the targets need it, the table with changed schedules (``table1+``,
-``table5+``), so that the gain of the response and of the schedule show apart.
+paper's table and, where the targets need it, the table with changed settings (``table1+``: a
+lambda_A floor and periodic joint angles; ``table5+``: schedules), so that the gain of the response
+and of the settings show apart.
 """
 
 from __future__ import annotations
