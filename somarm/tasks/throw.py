@@ -137,7 +137,8 @@ def simulate_trajectory(ux: float, uy: float, params: ThrowParams | None = None,
     ux_a, uy_a = _check_velocities(ux, uy)
     if ux_a.shape != ():
         raise ValueError(f"ux and uy must be single numbers, got shape {ux_a.shape}")
-    step = float(flight.step_for(ux_a, params.W, params.Fr / params.M, tolerance=params.tolerance))
+    step = float(flight.step_for(float(ux_a), float(uy_a), float(params.W), float(params.Fr / params.M), G=float(params.G),
+                                 tolerance=params.tolerance))
     if dt is not None:
         if not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a number > 0, got {dt!r}")
@@ -268,7 +269,7 @@ class ThrowEnvTask(OneStepEnvTask):
     def apply_action(self, physics: launcher.LauncherPhysics, action: np.ndarray) -> None:
         c = self._conditions
         self._velocity = (float(action[0]), float(action[1]))
-        step = float(flight.step_for(self._velocity[0], c["W"], c["Fr"] / c["M"],
+        step = float(flight.step_for(*self._velocity, c["W"], c["Fr"] / c["M"], G=float(self.batched.params.G),
                                      tolerance=self.batched.params.tolerance))
         self._launch = physics.launch(*self._velocity, step=step)
 
