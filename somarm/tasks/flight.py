@@ -143,6 +143,14 @@ def _one_step(ux: float, uy: float, W: float, k: float, G: float, tolerance: flo
     return T / n
 
 
+def _hermite(s, x0, v0, x1, v1, dt):
+    """The cubic Hermite interpolant of a step's end states at the fraction ``s`` (floats or arrays)."""
+    s2 = s * s
+    s3 = s2 * s
+    return ((2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * dt * v0
+            + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * dt * v1)
+
+
 def _locate(z0, w0, x0, v0, x1, v1, *, gravity: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """x where the height crosses 0 inside a step from (z0, w0) to below 0, and the time into the step."""
     disc = np.sqrt(np.maximum(w0 * w0 + 2.0 * gravity * z0, 0.0))
@@ -150,11 +158,15 @@ def _locate(z0, w0, x0, v0, x1, v1, *, gravity: float, dt: float) -> tuple[np.nd
     # Two forms of the same positive root, each free of cancellation on its side.
     tau = np.where(rising, (w0 + disc) / gravity, 2.0 * z0 / np.where(rising, 1.0, disc - w0))
     s = np.clip(tau / dt, 0.0, 1.0)
-    s2 = s * s
-    s3 = s2 * s
-    x = ((2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * dt * v0
-         + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * dt * v1)
-    return x, s * dt
+    return _hermite(s, x0, v0, x1, v1, dt), s * dt
+
+
+def _locate_one(z0: float, w0: float, x0: float, v0: float, x1: float, v1: float, *, gravity: float,
+                dt: float) -> float:
+    """``_locate`` of one projectile in plain floats (the dm_env path), the same arithmetic."""
+    disc = math.sqrt(max(w0 * w0 + 2.0 * gravity * z0, 0.0))
+    tau = (w0 + disc) / gravity if w0 >= 0.0 else 2.0 * z0 / (disc - w0)
+    return _hermite(min(max(tau / dt, 0.0), 1.0), x0, v0, x1, v1, dt)
 
 
 def _landings(positions: np.ndarray, velocities: np.ndarray, x, z, *, gravity: float, dt: float):
@@ -199,6 +211,11 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
     gravity = -float(model.opt.gravity[2])
     dt = float(model.opt.timestep)
     qpos, qvel = data.qpos, data.qvel
+    if not history and np.size(qpos[z]) == 1:
+        dofs = np.arange(model.nq)  # slide joints: qpos and qvel addresses coincide
+        landing = _fly_one(model, data, int(dofs[x].item()), int(dofs[z].item()), max_steps=max_steps,
+                           previous=previous, gravity=gravity, dt=dt)
+        return np.array([landing * scale])
     if not history:
         # Heights are exactly quadratic: no projectile lands before its analytic landing time,
         # so step natively to two steps short of the earliest and record only from there.
@@ -240,6 +257,30 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
     path[:, z] *= scale * scale
     path[last, x], path[last, z] = landing, 0.0
     return landing, times * scale, path
+
+
+def _fly_one(model: mujoco.MjModel, data: mujoco.MjData, x: int, z: int, *, max_steps: int,
+             previous: tuple[np.ndarray, np.ndarray] | None, gravity: float, dt: float) -> float:
+    """``fly`` for one projectile in plain floats (a dm_env episode): landing x in model units."""
+    qpos, qvel = data.qpos, data.qvel
+    rise = max(float(qvel[z]), 0.0)
+    earliest = (rise + math.sqrt(rise * rise + 2.0 * gravity * max(float(qpos[z]), 0.0))) / gravity
+    skip = min(int(earliest / dt) - 2, max_steps)
+    if skip > 0:  # the height is exactly quadratic: no landing before this
+        mujoco.mj_step(model, data, nstep=skip)
+        max_steps -= skip
+        previous = None
+    before = None if previous is None else (float(previous[0][x]), float(previous[0][z]),
+                                            float(previous[1][x]), float(previous[1][z]))
+    after = (float(qpos[x]), float(qpos[z]), float(qvel[x]), float(qvel[z]))
+    steps = 0
+    while before is None or after[1] > 0.0:
+        if steps > max_steps:
+            raise RuntimeError(f"projectile(s) still flying after {max_steps} steps")
+        mujoco.mj_step(model, data)
+        steps += 1
+        before, after = after, (float(qpos[x]), float(qpos[z]), float(qvel[x]), float(qvel[z]))
+    return _locate_one(before[1], before[3], before[0], before[2], after[0], after[2], gravity=gravity, dt=dt)
 
 
 def max_steps_for(uy_max: float, *, G: float, dt: float) -> int:
