@@ -201,3 +201,13 @@ def test_each_flight_takes_the_fewest_whole_steps_within_the_tolerance():
     # No drag: one step; no flight: a unit step that lands at once.
     assert flight.step_for(np.array([0.5]), np.array([0.4]), 0.0, 0.0, G=0.05)[0] == pytest.approx(16.0)
     assert flight.step_for(np.array([0.5]), np.array([0.0]), 0.0, 0.1, G=0.05)[0] == 1.0
+
+
+def test_reach_with_only_the_target_varied_is_the_closed_form_range():
+    task = tasks.make("throw_distance", n_trials=5, seed=0)
+    observations = np.linspace(-1.0, 12.0, 300)[:, None]
+    lowest, highest = ballistics.landing_range(G=0.05, Fr=0.1, W=0.0, M=1.0)
+    expected = (lowest <= observations[:, 0]) & (observations[:, 0] <= highest)
+    for _ in range(2):  # the range is computed once and then reused
+        np.testing.assert_array_equal(task.reachable(observations), expected)
+    assert 0 < expected.sum() < len(expected)

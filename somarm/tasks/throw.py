@@ -185,7 +185,13 @@ class Throw(OneStepTask):
     def reachable(self, observations: np.ndarray) -> np.ndarray:
         """Whether each observation's target lies within reach of the velocity square."""
         c = self.conditions(observations)
-        lowest, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+        fixed = (self.params.G, c["Fr"], c["W"], c["M"])
+        if all(isinstance(v, float) for v in fixed):  # only X varies: one range, computed once
+            if getattr(self, "_range", (None,))[0] != fixed:
+                self._range = (fixed, ballistics.landing_range(G=fixed[0], Fr=fixed[1], W=fixed[2], M=fixed[3]))
+            lowest, highest = self._range[1]
+        else:
+            lowest, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
         return (lowest <= c["X"]) & (c["X"] <= highest)
 
     def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
