@@ -24,8 +24,9 @@ def test_simulated_landing_equals_eq_7_over_random_throws():
     error = np.abs(simulated - exact)
     assert error.max() <= 1e-6, f"largest landing error {error.max():.2e}"
     # Each throw also respects the a-priori bound its step was chosen by (plus rounding).
-    step = flight.step_for(throws["ux"], throws["W"], throws["Fr"] / throws["M"])
-    bound = flight.error_bound(throws["ux"], throws["W"], throws["Fr"] / throws["M"], step)
+    k = throws["Fr"] / throws["M"]
+    step = flight.step_for(throws["ux"], throws["uy"], throws["W"], k, G=0.05)
+    bound = flight.error_bound(throws["ux"], throws["uy"], throws["W"], k, step, G=0.05)
     assert (error <= bound + 1e-11).all()
 
 
@@ -159,7 +160,7 @@ def test_the_dm_env_launcher_lands_where_the_batch_does():
         c = {k: float(throws[k][i]) for k in ("Fr", "W", "M")}
         physics.set_conditions(**c)
         ux, uy = float(throws["ux"][i]), float(throws["uy"][i])
-        launch = physics.launch(ux, uy, step=float(flight.step_for(ux, c["W"], c["Fr"] / c["M"])))
+        launch = physics.launch(ux, uy, step=float(flight.step_for(ux, uy, c["W"], c["Fr"] / c["M"], G=0.05)))
         physics.step()  # the dm_env takes the first step itself
         assert float(physics.fly(previous=launch)[0]) == batch[i]
 
@@ -176,3 +177,37 @@ def test_chunks_cover_the_sorted_batch_in_order_and_respect_the_size():
     sizes = np.diff(np.array(flight._partition(np.sort(rng.uniform(0, 160, 3000)), 256)), axis=1)
     assert sizes[sizes >= 200].sum() >= 0.8 * 3000
     assert 1 < len(flight._partition(np.sort(rng.uniform(0, 160, 100)), 256)) < 10
+
+
+def test_each_flight_takes_the_fewest_whole_steps_within_the_tolerance():
+    throws = _random_throws(2000, 7)
+    k = throws["Fr"] / throws["M"]
+    step = flight.step_for(throws["ux"], throws["uy"], throws["W"], k, G=0.05)
+    T = flight.flight_time(throws["uy"], 0.05)
+    n = T / step
+    np.testing.assert_allclose(n, np.round(n), rtol=0, atol=1e-9)  # the flight ends on a step's end
+    assert (flight.error_bound(throws["ux"], throws["uy"], throws["W"], k, step, G=0.05)
+            <= flight.DEFAULT_TOLERANCE).all()
+    # One step fewer would break the tolerance (or the k h limit), so N is the smallest.
+    fewer = np.round(n) - 1
+    ok = fewer >= 1
+    longer = T[ok] / fewer[ok]
+    bound = flight.error_bound(throws["ux"][ok], throws["uy"][ok], throws["W"][ok], k[ok], longer, G=0.05)
+    assert ((bound > flight.DEFAULT_TOLERANCE) | (k[ok] * longer > flight.MAX_KH)).all()
+    # The dm_env path computes the same step from plain floats.
+    for i in range(0, 2000, 97):
+        one = flight.step_for(*(float(throws[key][i]) for key in ("ux", "uy", "W")), float(k[i]), G=0.05)
+        assert one == step[i]
+    # No drag: one step; no flight: a unit step that lands at once.
+    assert flight.step_for(np.array([0.5]), np.array([0.4]), 0.0, 0.0, G=0.05)[0] == pytest.approx(16.0)
+    assert flight.step_for(np.array([0.5]), np.array([0.0]), 0.0, 0.1, G=0.05)[0] == 1.0
+
+
+def test_reach_with_only_the_target_varied_is_the_closed_form_range():
+    task = tasks.make("throw_distance", n_trials=5, seed=0)
+    observations = np.linspace(-1.0, 12.0, 300)[:, None]
+    lowest, highest = ballistics.landing_range(G=0.05, Fr=0.1, W=0.0, M=1.0)
+    expected = (lowest <= observations[:, 0]) & (observations[:, 0] <= highest)
+    for _ in range(2):  # the range is computed once and then reused
+        np.testing.assert_array_equal(task.reachable(observations), expected)
+    assert 0 < expected.sum() < len(expected)

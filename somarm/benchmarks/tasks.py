@@ -151,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
           "|MJ-exact|: largest landing (throws) or fingertip (arms) difference; step100/step20: one "
           "training step (reset + step) of 100/20 trials, and its cost per evaluation as a multiple "
           "of the large batch's.")
-    print(f"Throws: RK4 step per throw from {flight.STEP_LADDER} for a landing-error bound of "
+    print(f"Throws: each flight in the fewest equal RK4 steps whose landing-error bound is within "
           f"{flight.DEFAULT_TOLERANCE:g}, all steps in one model by time scaling; {flight.THREADS} thread(s); "
           "batches sorted by flight length.")
     if driven:

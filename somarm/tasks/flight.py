@@ -8,14 +8,18 @@ acceleration, which RK4 integrates exactly), so the crossing time is the root of
 quadratic, and x at that time is the cubic Hermite interpolant of the positions and
 velocities at both ends of the step (no extra step, no lag).
 
-The RK4 step is chosen per throw from an a-priori bound on the landing error. Horizontally
-RK4 multiplies ``u = v + W`` by the quartic Taylor polynomial R of exp(-k h) each step, and
-the position sums those steps exactly, so after N steps the simulated landing differs from
-Eq. 7 by ``u0 (exp(-kT) - R^N) / k``; to leading order that is at most
-``|u0| k^3 h^4 / (120 e)``, and the Hermite interpolation adds at most ``|u0| k^3 h^4 / 384``.
-``step_for`` picks the largest step of a fixed ladder whose bound stays under the tolerance:
-drag-free throws take the largest step, the strongest drag and wind of Table 6 0.25. The
-bound is the leading term in k h, good while k h stays small (k h <= 0.2 in Table 6).
+The RK4 step is chosen per throw from a bound on its landing error. Vertically the motion has
+constant acceleration, which RK4 integrates exactly, so the flight time ``T = 2 u_y / G`` is known
+before the throw; each throw takes ``N`` equal steps of ``h = T / N`` and lands at the end of its
+last step, so no interpolation error enters. Horizontally RK4 multiplies ``u = v + W`` by the
+quartic Taylor polynomial R(z) of exp(-z), ``z = k h``, each step, and moves x by exactly
+``(1 - R) u / k``, so after N steps the simulated landing differs from Eq. 7 by
+``|u0| (R^N - exp(-kT)) / k``. The alternating tail of exp(-z) gives
+``1 <= R exp(z) <= 1 + d``, ``d = exp(z) z^5 / 120`` (for z <= 1), hence the bound
+``|u0| exp(-kT) expm1(N d) / k``, about ``|u0| k^4 h^4 T exp(-kT) / 120``. ``step_for`` picks
+the smallest N within the tolerance: drag-free throws take one step, Table 6's strongest drag and
+wind about 60. (Until round 2 the steps came from a fixed ladder of round values and a
+leading-order bound over every flight time: about twice the steps.)
 
 Throws of different steps share one model through a change of time scale: a throw whose step
 is ``c`` is simulated in the time ``s = t / c`` with the model's step ``SCALED_STEP = 1``, its
@@ -45,18 +49,16 @@ from mujoco import rollout as mj_rollout
 from somarm.tasks.assets import model_path
 from somarm.tasks.pool import shared_pool
 
-__all__ = ["DEFAULT_TOLERANCE", "STEP_LADDER", "SCALED_STEP", "error_bound", "step_for", "fly",
+__all__ = ["DEFAULT_TOLERANCE", "MAX_KH", "SCALED_STEP", "error_bound", "step_for", "fly",
            "max_steps_for", "ProjectileBatch", "landing_x"]
 
-#: This project's bound on the landing error of one throw, used to pick its RK4 step: half of
-#: 1e-6, and about twice what the largest errors measured over Table 6's box reach.
-DEFAULT_TOLERANCE = 5e-7
-#: The steps a throw may use, largest first (round values, so that flight times of round u_y
-#: fall on whole steps, the case where interpolation error hides; the tests use random u_y).
-STEP_LADDER: tuple[float, ...] = (1.0, 0.8, 0.5, 0.4, 0.25, 0.2, 0.125, 0.1, 0.05, 0.025)
+#: This project's bound on the landing error of one throw, used to pick its RK4 step: 1e-6 (the
+#: tasks' promise to Eq. 7) less a margin for rounding.
+DEFAULT_TOLERANCE = 9e-7
+#: Largest drag rate times step (the bound's alternating-series argument holds for k h <= 1).
+MAX_KH = 1.0
 #: The models' own step: a throw of step c runs in the time t / c (see the module docstring).
 SCALED_STEP = 1.0
-_BOUND_FACTOR = 1.0 / (120.0 * math.e) + 1.0 / 384.0
 _CHUNK = 256
 #: The fixed cost of one model step in projectile-steps (measured: about 7 us per RK4 step of a
 #: model, 0.7 us per projectile in it); it decides how finely a small batch is cut.
@@ -69,32 +71,84 @@ _FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
 THREADS = 2
 
 
-def error_bound(ux, W, k, step) -> np.ndarray:
-    """Leading-order bound on the simulated landing error: ``|ux + W| k^3 h^4 (1/(120 e) + 1/384)``."""
-    k = np.asarray(k)
-    return np.abs(np.asarray(ux) + W) * (k * k * k) * _BOUND_FACTOR * np.asarray(step) ** 4
+def flight_time(uy, G: float) -> np.ndarray:
+    """Time from launch at height 0 back to height 0, ``2 max(u_y, 0) / G``."""
+    return 2.0 * np.maximum(np.asarray(uy, dtype=np.float64), 0.0) / G
 
 
-def step_for(ux, W, k, *, tolerance: float = DEFAULT_TOLERANCE) -> np.ndarray:
-    """The largest step of ``STEP_LADDER`` whose ``error_bound`` is within ``tolerance``, per throw.
+def _bound(u0, k, T, n):
+    """``u0 exp(-kT) expm1(n d) / k`` with ``d = exp(z) z^5 / 120``, ``z = k T / n`` (0 where k = 0)."""
+    safe = np.where(k > 0.0, k, 1.0)
+    z = safe * T / n
+    d = np.exp(z) * z ** 5 / 120.0
+    with np.errstate(over="ignore"):  # a far too long step: the bound is inf, as it should read
+        return np.where(k > 0.0, u0 * np.exp(-safe * T) * np.expm1(n * d) / safe, 0.0)
+
+
+def error_bound(ux, uy, W, k, step, *, G: float) -> np.ndarray:
+    """Bound on the simulated landing error of throws flown with RK4 step ``step`` (arrays broadcast).
+
+    When the flight time T is a whole number N of steps (as ``step_for`` picks it) the bound is
+    ``|ux + W| exp(-kT) expm1(N d) / k`` (module docstring); otherwise the landing is interpolated
+    inside the last step and ``|ux + W| k^3 h^4 / 384`` (the cubic Hermite term) is added.
+    """
+    k, h = np.asarray(k, dtype=np.float64), np.asarray(step, dtype=np.float64)
+    T = flight_time(uy, G)
+    u0 = np.abs(np.asarray(ux) + W)
+    steps = T / h
+    whole = np.abs(steps - np.round(steps)) <= 1e-9 * np.maximum(steps, 1.0)
+    return _bound(u0, k, T, np.maximum(np.ceil(steps - 1e-9), 1.0)) + np.where(whole, 0.0, u0 * k ** 3 * h ** 4 / 384.0)
+
+
+def step_for(ux, uy, W, k, *, G: float, tolerance: float = DEFAULT_TOLERANCE) -> np.ndarray:
+    """Each throw's RK4 step: its flight time split into the fewest equal steps within ``tolerance``.
 
     Args:
-      ux, W, k: launch x velocity, wind and drag rate Fr / M (arrays that broadcast).
-      tolerance: the bound to respect (> 0); throws that no step satisfies get the smallest.
+      ux, uy, W, k: launch velocity, wind and drag rate Fr / M (arrays that broadcast).
+      G: gravity.
+      tolerance: the bound (``error_bound``) to respect (> 0).
 
     Returns:
-      Steps of the broadcast shape.
+      Steps ``T / N`` of the broadcast shape (1 for a throw that does not leave the ground).
     """
-    if all(isinstance(a, float) for a in (ux, W, k)):  # one throw (the dm_env path): no arrays
-        base = abs(ux + W) * (k * k * k) * _BOUND_FACTOR
-        return np.float64(next((h for h in STEP_LADDER if base * h ** 4 <= tolerance), STEP_LADDER[-1]))
-    ux, W, k = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, W, k)))
-    # The bound is base * h^4, so the largest admissible step is the first of the ladder that fits.
-    base = np.abs(ux + W) * (k * k * k) * _BOUND_FACTOR
-    step = np.full(ux.shape, STEP_LADDER[-1])
-    for h in reversed(STEP_LADDER[:-1]):
-        step = np.where(base * h ** 4 <= tolerance, h, step)
-    return step
+    if all(isinstance(a, float) for a in (ux, uy, W, k)):  # one throw (the dm_env path): no arrays
+        return np.float64(_one_step(ux, uy, W, k, G, tolerance))
+    ux, uy, W, k = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, uy, W, k)))
+    T = flight_time(uy, G)
+    u0 = np.abs(ux + W)
+    # The leading term u0 k^4 h^4 T exp(-kT) / 120 gives N; the exact bound then adds a step or two.
+    lead = u0 * k ** 4 * T * np.exp(-k * T) / 120.0
+    with np.errstate(divide="ignore"):
+        longest = np.minimum((tolerance / lead) ** 0.25, MAX_KH / np.where(k > 0.0, k, 0.0))
+    n = np.maximum(np.ceil(T / longest), 1.0)
+    while (over := _bound(u0, k, T, n) > tolerance).any():
+        n = n + over
+    return np.where(T > 0.0, T / n, 1.0)
+
+
+def _one_step(ux: float, uy: float, W: float, k: float, G: float, tolerance: float) -> float:
+    """``step_for`` of one throw in plain floats (the same arithmetic as the arrays')."""
+    T = 2.0 * max(uy, 0.0) / G
+    if T <= 0.0:
+        return 1.0
+    if k <= 0.0:
+        return T
+    u0 = abs(ux + W)
+    lead = u0 * k ** 4 * T * math.exp(-k * T) / 120.0
+    longest = min((tolerance / lead) ** 0.25 if lead > 0.0 else math.inf, MAX_KH / k)
+    n = max(math.ceil(T / longest), 1.0)
+    decay = u0 * math.exp(-k * T) / k
+    while decay * math.expm1(n * math.exp(k * T / n) * (k * T / n) ** 5 / 120.0) > tolerance:
+        n += 1.0
+    return T / n
+
+
+def _hermite(s, x0, v0, x1, v1, dt):
+    """The cubic Hermite interpolant of a step's end states at the fraction ``s`` (floats or arrays)."""
+    s2 = s * s
+    s3 = s2 * s
+    return ((2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * dt * v0
+            + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * dt * v1)
 
 
 def _locate(z0, w0, x0, v0, x1, v1, *, gravity: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -104,11 +158,15 @@ def _locate(z0, w0, x0, v0, x1, v1, *, gravity: float, dt: float) -> tuple[np.nd
     # Two forms of the same positive root, each free of cancellation on its side.
     tau = np.where(rising, (w0 + disc) / gravity, 2.0 * z0 / np.where(rising, 1.0, disc - w0))
     s = np.clip(tau / dt, 0.0, 1.0)
-    s2 = s * s
-    s3 = s2 * s
-    x = ((2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * dt * v0
-         + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * dt * v1)
-    return x, s * dt
+    return _hermite(s, x0, v0, x1, v1, dt), s * dt
+
+
+def _locate_one(z0: float, w0: float, x0: float, v0: float, x1: float, v1: float, *, gravity: float,
+                dt: float) -> float:
+    """``_locate`` of one projectile in plain floats (the dm_env path), the same arithmetic."""
+    disc = math.sqrt(max(w0 * w0 + 2.0 * gravity * z0, 0.0))
+    tau = (w0 + disc) / gravity if w0 >= 0.0 else 2.0 * z0 / (disc - w0)
+    return _hermite(min(max(tau / dt, 0.0), 1.0), x0, v0, x1, v1, dt)
 
 
 def _landings(positions: np.ndarray, velocities: np.ndarray, x, z, *, gravity: float, dt: float):
@@ -153,6 +211,11 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
     gravity = -float(model.opt.gravity[2])
     dt = float(model.opt.timestep)
     qpos, qvel = data.qpos, data.qvel
+    if not history and np.size(qpos[z]) == 1:
+        dofs = np.arange(model.nq)  # slide joints: qpos and qvel addresses coincide
+        landing = _fly_one(model, data, int(dofs[x].item()), int(dofs[z].item()), max_steps=max_steps,
+                           previous=previous, gravity=gravity, dt=dt)
+        return np.array([landing * scale])
     if not history:
         # Heights are exactly quadratic: no projectile lands before its analytic landing time,
         # so step natively to two steps short of the earliest and record only from there.
@@ -196,9 +259,34 @@ def fly(model: mujoco.MjModel, data: mujoco.MjData, *, x: slice | np.ndarray, z:
     return landing, times * scale, path
 
 
+def _fly_one(model: mujoco.MjModel, data: mujoco.MjData, x: int, z: int, *, max_steps: int,
+             previous: tuple[np.ndarray, np.ndarray] | None, gravity: float, dt: float) -> float:
+    """``fly`` for one projectile in plain floats (a dm_env episode): landing x in model units."""
+    qpos, qvel = data.qpos, data.qvel
+    rise = max(float(qvel[z]), 0.0)
+    earliest = (rise + math.sqrt(rise * rise + 2.0 * gravity * max(float(qpos[z]), 0.0))) / gravity
+    skip = min(int(earliest / dt) - 2, max_steps)
+    if skip > 0:  # the height is exactly quadratic: no landing before this
+        mujoco.mj_step(model, data, nstep=skip)
+        max_steps -= skip
+        previous = None
+    before = None if previous is None else (float(previous[0][x]), float(previous[0][z]),
+                                            float(previous[1][x]), float(previous[1][z]))
+    after = (float(qpos[x]), float(qpos[z]), float(qvel[x]), float(qvel[z]))
+    steps = 0
+    while before is None or after[1] > 0.0:
+        if steps > max_steps:
+            raise RuntimeError(f"projectile(s) still flying after {max_steps} steps")
+        mujoco.mj_step(model, data)
+        steps += 1
+        before, after = after, (float(qpos[x]), float(qpos[z]), float(qvel[x]), float(qvel[z]))
+    return _locate_one(before[1], before[3], before[0], before[2], after[0], after[2], gravity=gravity, dt=dt)
+
+
 def max_steps_for(uy_max: float, *, G: float, dt: float) -> int:
-    """Steps that cover a flight launched upwards at ``uy_max``, with a margin of two."""
-    return int(math.ceil(2.0 * max(uy_max, 0.0) / (G * dt))) + 2
+    """Steps that cover a flight launched upwards at ``uy_max``: its flight time in steps (less a
+    rounding allowance, for flights of a whole number of steps) and one more."""
+    return int(math.ceil(2.0 * max(uy_max, 0.0) / (G * dt) - 1e-9)) + 1
 
 
 class ProjectileBatch:
@@ -330,7 +418,7 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
     if total == 0:
         return out.reshape(shape)
     k = Fr_ / M_
-    scale = step_for(ux_, W_, k, tolerance=tolerance)
+    scale = step_for(ux_, uy_, W_, k, G=G, tolerance=tolerance)
     lengths = 2.0 * (uy_ / scale) / (G * SCALED_STEP)  # flight in model steps
     order = np.argsort(lengths, kind="stable")
     bounds = _partition(lengths[order], max(1, chunk))

@@ -137,7 +137,8 @@ def simulate_trajectory(ux: float, uy: float, params: ThrowParams | None = None,
     ux_a, uy_a = _check_velocities(ux, uy)
     if ux_a.shape != ():
         raise ValueError(f"ux and uy must be single numbers, got shape {ux_a.shape}")
-    step = float(flight.step_for(ux_a, params.W, params.Fr / params.M, tolerance=params.tolerance))
+    step = float(flight.step_for(float(ux_a), float(uy_a), float(params.W), float(params.Fr / params.M), G=float(params.G),
+                                 tolerance=params.tolerance))
     if dt is not None:
         if not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a number > 0, got {dt!r}")
@@ -184,7 +185,13 @@ class Throw(OneStepTask):
     def reachable(self, observations: np.ndarray) -> np.ndarray:
         """Whether each observation's target lies within reach of the velocity square."""
         c = self.conditions(observations)
-        lowest, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+        fixed = (self.params.G, c["Fr"], c["W"], c["M"])
+        if all(isinstance(v, float) for v in fixed):  # only X varies: one range, computed once
+            if getattr(self, "_range", (None,))[0] != fixed:
+                self._range = (fixed, ballistics.landing_range(G=fixed[0], Fr=fixed[1], W=fixed[2], M=fixed[3]))
+            lowest, highest = self._range[1]
+        else:
+            lowest, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
         return (lowest <= c["X"]) & (c["X"] <= highest)
 
     def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
@@ -268,7 +275,7 @@ class ThrowEnvTask(OneStepEnvTask):
     def apply_action(self, physics: launcher.LauncherPhysics, action: np.ndarray) -> None:
         c = self._conditions
         self._velocity = (float(action[0]), float(action[1]))
-        step = float(flight.step_for(self._velocity[0], c["W"], c["Fr"] / c["M"],
+        step = float(flight.step_for(*self._velocity, c["W"], c["Fr"] / c["M"], G=float(self.batched.params.G),
                                      tolerance=self.batched.params.tolerance))
         self._launch = physics.launch(*self._velocity, step=step)
 
