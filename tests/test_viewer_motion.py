@@ -67,3 +67,14 @@ def test_obstacle_episodes_end_at_the_goal_or_the_step_limit_and_draw_wall_and_g
     drawn = {c["path"] for c in recorder.commands() if c["type"] == "set_object"}
     assert any(p.endswith("/wall/shape") or "/wall" in p for p in drawn)
     assert any("/goal" in p for p in drawn)
+
+
+def test_the_arm_moves_between_goals_the_shorter_way_round():
+    from somarm.viewer.shows import joint_path
+
+    start, end = np.array([3.0, -0.5]), np.array([-3.0, 0.5])  # 0.28 rad apart across +-pi for joint 1
+    middle = joint_path(start, end, 0.5)
+    np.testing.assert_allclose(np.cos(middle[0]), -1.0, atol=1e-12)  # through pi, not through 0
+    np.testing.assert_allclose(middle[1], 0.0, atol=1e-12)
+    np.testing.assert_allclose(joint_path(start, end, 0.0), start)
+    np.testing.assert_allclose(np.exp(1j * joint_path(start, end, 1.0)), np.exp(1j * end), atol=1e-12)

@@ -20,7 +20,8 @@ from somarm.viewer import overlays
 from somarm.viewer.adapters import goal_adapter, throw_adapters
 from somarm.viewer.scene import MujocoScene, path_of
 
-__all__ = ["ArmShow", "SweepShow", "ThrowShow", "load_model", "show_for_task", "arm_animation"]
+__all__ = ["ArmShow", "SweepShow", "ThrowShow", "load_model", "show_for_task", "arm_animation",
+           "joint_path"]
 
 _TIP_COLOR, _ERROR_COLOR, _INPUT_COLOR = 0xFFD21F, 0xE0301E, 0x3050C0
 #: Frames of joint-space interpolation between two goals in the HTML animation.
@@ -324,6 +325,17 @@ def _stream(session, sink, commands_of, pause_s: Callable[[], float], *, once: b
             return
 
 
+def joint_path(start: np.ndarray, end: np.ndarray, share: float) -> np.ndarray:
+    """Joint angles ``share`` of the way from ``start`` to ``end``, each joint the shorter way round.
+
+    The arms' joints turn freely, so -pi and pi are one pose: a learner whose angles wrap
+    (``periodic_actions``) may answer neighbouring goals from both ends of the box, and the arm
+    must not swing a full turn between them.
+    """
+    step = np.mod(end - start + np.pi, 2.0 * np.pi) - np.pi
+    return start + share * step
+
+
 def arm_animation(show: ArmShow, observations: np.ndarray, actions: np.ndarray) -> dict:
     """A looping animation through the goals: hold each pose, then move in joint space to the next."""
     frames = []
@@ -332,8 +344,7 @@ def arm_animation(show: ArmShow, observations: np.ndarray, actions: np.ndarray) 
         frames += [show.frame(observations[k], actions[k])] * _FRAMES_HOLDING_GOAL
         following = (k + 1) % n
         for share in np.linspace(0.0, 1.0, _FRAMES_BETWEEN_GOALS + 2)[1:-1]:
-            action = (1 - share) * actions[k] + share * actions[following]
-            frames.append(show.frame(observations[following], action))
+            frames.append(show.frame(observations[following], joint_path(actions[k], actions[following], share)))
     return overlays.animation_command(frames)
 
 
