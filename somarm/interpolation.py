@@ -73,6 +73,9 @@ def _nearest(x, weights, order, squared):
     """Fill ``order``/``squared`` with the ``len(order)`` nearest units, ascending (ties: lower index)."""
     count = 0
     size = order.shape[0]
+    # The distance a unit must beat to enter the list, in a local (the arrays are written in the
+    # loop, so a bound read from them each time would be reloaded from memory: twice the cost).
+    worst = np.inf
     for m in range(weights.shape[0]):
         total = 0.0
         for i in range(x.shape[0]):
@@ -80,7 +83,7 @@ def _nearest(x, weights, order, squared):
             total += diff * diff
         if count < size:
             count += 1
-        elif not total < squared[size - 1]:
+        elif not total < worst:
             continue
         place = count - 1
         while place > 0 and total < squared[place - 1]:
@@ -89,6 +92,8 @@ def _nearest(x, weights, order, squared):
             place -= 1
         order[place] = m
         squared[place] = total
+        if count == size:
+            worst = squared[size - 1]
 
 
 @numba.njit(cache=True)
