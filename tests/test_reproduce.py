@@ -91,7 +91,7 @@ def test_ctrl_c_stops_the_whole_reproduction_and_keeps_finished_parts(tmp_path):
         line = ""
         while not line.startswith("reach2:") and time.monotonic() < deadline:
             line = proc.stderr.readline()
-        time.sleep(1.0)
+        time.sleep(0.3)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
     finally:

@@ -42,7 +42,7 @@ def _overlay_schedule(ax, steps: np.ndarray, decay, label: str) -> None:
 
 def reach2(ctx: Context) -> Section:
     """Figs. 7-10: the 2-link arm reaching goals on a circle with Table 1."""
-    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(50_000, 6_000)
+    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(50_000, 3_000)
     config = RunConfig(task="reach2", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
     result = run(ctx, "Figs 7-10 reach2", config)
     learner, task = result.learner, result.task
@@ -187,7 +187,7 @@ def reach20(ctx: Context) -> Section:
     from somarm import kinematics
     from somarm.tasks import arms
 
-    n_trials, n_steps = ctx.pick(5, 1), ctx.pick(50_000, 6_000)
+    n_trials, n_steps = ctx.pick(5, 1), ctx.pick(50_000, 3_000)
     config = RunConfig(task="reach20", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
     result = run(ctx, "Fig 11 reach20", config)
     learner, task = result.learner, result.task
@@ -254,7 +254,7 @@ def four_goals(ctx: Context) -> Section:
     from somarm.tasks import four_goals as task_module
 
     n_trials = ctx.pick(20, 4)
-    switch = ctx.pick(20_000, 3_000)
+    switch = ctx.pick(20_000, 1_500)
     n_steps = 2 * switch
     params = {"switch_step": switch}
     kinds = ("somq", "motoric")
@@ -278,9 +278,9 @@ def four_goals(ctx: Context) -> Section:
         f"{n_trials} trials of {n_steps} steps, goals moved at t = {switch}; goal positions before and "
         "after the move are this project's (see the task).",
         "'Learns faster' is measured as the mean error over the first 5000 steps of each phase "
-        "(first 1000 in quick mode) and over the whole phase.",
+        "(first 500 in quick mode) and over the whole phase.",
     ]
-    early = ctx.pick(5000, 1000)
+    early = ctx.pick(5000, 500)
     steps = runs["somq"].steps
     phases = {"before": (steps <= early), "after": (steps > switch) & (steps <= switch + early)}
     whole = {"before": steps <= switch, "after": steps > switch}

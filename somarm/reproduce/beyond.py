@@ -31,9 +31,9 @@ _NOT_WORSE = 1.10
 def _plan(ctx: Context) -> list[tuple[str, tuple[str, ...], int, int]]:
     """(task, presets, trials, steps) of each comparison."""
     return [
-        ("reach2", ("table1", "table1+"), ctx.pick(20, 2), ctx.pick(50_000, 2_000)),
+        ("reach2", ("table1", "table1+"), ctx.pick(20, 2), ctx.pick(50_000, 1_000)),
         ("reach20", ("table1",), ctx.pick(10, 2), ctx.pick(50_000, 1_000)),
-        ("four_goals", ("table2",), ctx.pick(20, 2), ctx.pick(40_000, 2_000)),
+        ("four_goals", ("table2",), ctx.pick(20, 2), ctx.pick(40_000, 1_000)),
         ("throw_distance", ("table5", "table5+"), ctx.pick(20, 2), ctx.pick(25_000, 1_000)),
     ]
 

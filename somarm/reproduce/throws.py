@@ -38,15 +38,15 @@ def throw(ctx: Context) -> Section:
     """Figs. 16-20: a single state, target X = 4, Table 4, 4000 throws."""
     from somarm.tasks import throw as throw_task
 
-    n_trials = ctx.pick(20, 4)
-    config = RunConfig(task="throw", preset="table4", n_trials=n_trials, n_steps=4000, seed=ctx.seed)
-    spans_at = (1, 20, 500, 4000)
+    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(4000, 1500)
+    config = RunConfig(task="throw", preset="table4", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
+    spans_at = tuple(t for t in (1, 20, 500, 4000) if t < n_steps) + (n_steps,)
     result = run(ctx, "Figs 16-20 throw", config, snapshots_at=spans_at)
     learner = result.learner
     section = Section("throw", "Figs. 16-20: throwing at a target X = 4 (Tables 3 and 4)")
     section.choices += preset_choices("table4")
     section.choices += [
-        f"{n_trials} trials of 4000 throws (the paper shows one typical trial).",
+        f"{n_trials} trials of {n_steps} throws (the paper shows one typical trial).",
         "A unit lies on the curve when its distance to Eq. 8's curve in the velocity square is at most 0.02; "
         "the lowest, hardest throws count as avoided when the lowest unit's u_y is above the curve's lowest "
         "point (at u_x = 1) by more than 0.02.",
@@ -152,7 +152,7 @@ def throw(ctx: Context) -> Section:
         xlim=(0, 1),
         ylim=(0, 1),
         aspect="equal",
-        title=f"Figs. 17-18: action map after 4000 throws (trial {i})",
+        title=f"Figs. 17-18: action map after {n_steps} throws (trial {i})",
     )
     ax.legend(loc="upper right")
     section.figures.append(ctx.save(fig, "fig17_throw_action_map.png"))
@@ -180,7 +180,7 @@ def _greedy_landing(learner, trial: int, backend: str) -> tuple[np.ndarray, np.n
 
 def throw_maps(ctx: Context) -> Section:
     """Figs. 21-23: varied target distance, three trials each with N_A = 25, 50 and 5."""
-    n_trials, n_steps = 3, ctx.pick(10_000, 3_000)
+    n_trials, n_steps = 3, ctx.pick(10_000, 1_000)
     section = Section("throw_maps", "Figs. 21-23: varied target distance, action neighbourhoods 25, 50, 5")
     section.choices += preset_choices("table5")
     section.choices += [
@@ -298,7 +298,7 @@ def throw_maps(ctx: Context) -> Section:
 
 def neighbourhood_q(ctx: Context) -> Section:
     """Fig. 24: +NL/0.9985, -NL/0.9985 and -NL/0.9997 on throw_distance."""
-    n_trials, n_steps = ctx.pick(20, 3), ctx.pick(25_000, 6_000)
+    n_trials, n_steps = ctx.pick(20, 3), ctx.pick(25_000, 2_000)
     variants = {
         "+NL/0.9985": {"neighbourhood_q": "true", "decay": "exp:0.9985"},
         "-NL/0.9985": {"neighbourhood_q": "false", "decay": "exp:0.9985"},
@@ -416,7 +416,7 @@ def neighbourhood_q(ctx: Context) -> Section:
 
 def more_inputs(ctx: Context) -> Section:
     """Fig. 25: experiments A to D of Table 6 under Table 7, with the -2 punishment below 45 degrees."""
-    n_trials, n_steps = ctx.pick(100, 4), ctx.pick(15_000, 4_000)
+    n_trials, n_steps = ctx.pick(100, 4), ctx.pick(15_000, 1_200)
     experiments = {
         "A": ("throw_distance", "table7a"),
         "B": ("throw_wind", "table7"),
