@@ -69,17 +69,18 @@ def n_basis_for(input_shape: tuple[int, ...]) -> int:
 
 
 @numba.njit(cache=True)
-def _nearest(x, weights, order, squared):
-    """Fill ``order``/``squared`` with the ``len(order)`` nearest units, ascending (ties: lower index)."""
+def _nearest(x, weights, trial, order, squared):
+    """Fill ``order``/``squared`` with the ``len(order)`` units of ``weights[trial]`` nearest ``x``,
+    ascending (ties: lower index)."""
     count = 0
     size = order.shape[0]
     # The distance a unit must beat to enter the list, in a local (the arrays are written in the
     # loop, so a bound read from them each time would be reloaded from memory: twice the cost).
     worst = np.inf
-    for m in range(weights.shape[0]):
+    for m in range(weights.shape[1]):
         total = 0.0
         for i in range(x.shape[0]):
-            diff = x[i] - weights[m, i]
+            diff = x[i] - weights[trial, m, i]
             total += diff * diff
         if count < size:
             count += 1
@@ -97,16 +98,19 @@ def _nearest(x, weights, order, squared):
 
 
 @numba.njit(cache=True)
-def _greedy(q_row, tie):
-    """The action unit with the best Q; ties broken by the uniform number ``tie`` (0: lowest index).
+def _greedy(q, trial, j, tie):
+    """The action unit with the best ``q[trial, j]``; ties broken by the uniform number ``tie`` (0:
+    lowest index).
 
     One pass finds the first best unit and counts its ties; a second runs only if there are ties.
+    (The kernels index whole arrays by trial instead of slicing a view per trial: each view costs
+    numba reference counting.)
     """
-    top = q_row[0]
+    top = q[trial, j, 0]
     best = 0
     n_tied = 1
-    for n in range(1, q_row.shape[0]):
-        value = q_row[n]
+    for n in range(1, q.shape[2]):
+        value = q[trial, j, n]
         if value > top:
             top = value
             best = n
@@ -116,8 +120,8 @@ def _greedy(q_row, tie):
     if n_tied == 1:
         return best
     pick = min(int(tie * n_tied), n_tied - 1)
-    for n in range(best, q_row.shape[0]):
-        if q_row[n] == top:
+    for n in range(best, q.shape[2]):
+        if q[trial, j, n] == top:
             if pick == 0:
                 return n
             pick -= 1
@@ -125,13 +129,13 @@ def _greedy(q_row, tie):
 
 
 @numba.njit(cache=True)
-def _exploring_unit(q_row, u, tie, distances_a):
+def _exploring_unit(q, trial, j, u, tie, distances_a):
     """Step 2 when exploring: with probability NEIGHBOUR_SHARE (``u`` below it) a grid neighbour of the
     greedy unit, else (``u`` rescaled) a random unit as in the paper."""
-    n_a = q_row.shape[0]
+    n_a = q.shape[2]
     if u >= NEIGHBOUR_SHARE:
         return min(int((u - NEIGHBOUR_SHARE) / (1.0 - NEIGHBOUR_SHARE) * n_a), n_a - 1)
-    best = _greedy(q_row, tie)
+    best = _greedy(q, trial, j, tie)
     count = 0
     for n in range(n_a):
         if 0.0 < distances_a[best, n] <= 1.0:
@@ -148,10 +152,10 @@ def _exploring_unit(q_row, u, tie, distances_a):
 
 
 @numba.njit(cache=True)
-def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, wrap, order, squared,
-              beta, units, out):
-    """The blended greedy action of one trial into ``out``; returns (winner j, its greedy unit k)."""
-    _nearest(x, input_weights, order, squared)
+def _response(x, trial, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, wrap, order,
+              squared, beta, units, out):
+    """The blended greedy action of trial ``trial`` for ``x`` into ``out``; returns (winner j, its greedy unit k)."""
+    _nearest(x, input_weights, trial, order, squared)
     n_found = order.shape[0]
     n_used = min(n_basis, n_found)
     for i in range(n_used):
@@ -171,27 +175,27 @@ def _response(x, input_weights, action_weights, q, tie, distances_a, n_basis, lo
             beta[0] = 1.0
             for i in range(1, n_used):
                 beta[i] = 0.0
-    k = _greedy(q[order[0]], tie)
+    k = _greedy(q, trial, order[0], tie)
     units[0] = k
     kept = beta[0]
     for i in range(1, n_used):
-        units[i] = _greedy(q[order[i]], tie) if beta[i] > 0.0 else k
+        units[i] = _greedy(q, trial, order[i], tie) if beta[i] > 0.0 else k
         if beta[i] > 0.0 and distances_a[k, units[i]] > MAX_JUMP:
             beta[i] = 0.0
         kept += beta[i]
     for d in range(out.shape[0]):
         value = 0.0
         if wrap[d]:
-            base = action_weights[k, d]
+            base = action_weights[trial, k, d]
             period = high[d] - low[d]
             for i in range(n_used):
                 if beta[i] > 0.0:
-                    value += (beta[i] / kept) * (base + arc(action_weights[units[i], d] - base, period))
+                    value += (beta[i] / kept) * (base + arc(action_weights[trial, units[i], d] - base, period))
             out[d] = wrapped(value, low[d], high[d])
             continue
         for i in range(n_used):
             if beta[i] > 0.0:
-                value += (beta[i] / kept) * action_weights[units[i], d]
+                value += (beta[i] / kept) * action_weights[trial, units[i], d]
         out[d] = min(max(value, low[d]), high[d])  # a blend of units in the bounds, up to rounding
     return order[0], k
 
@@ -218,13 +222,12 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         if row[0] < p:
             # Exploring: the paper's random action unit, its weights unblended.
             j = nearest_unit(observations[trial], input_weights[trial])
-            k = _exploring_unit(q[trial, j], row[1], row[2], distances_a)
+            k = _exploring_unit(q, trial, j, row[1], row[2], distances_a)
             for i in range(proposal.shape[0]):
                 proposal[i] = action_weights[trial, k, i]
         else:
-            j, k = _response(observations[trial], input_weights[trial], action_weights[trial], q[trial],
-                             row[2], distances_a, n_basis, low, high, wrap, order, squared, beta,
-                             blended_units, proposal)
+            j, k = _response(observations[trial], trial, input_weights, action_weights, q, row[2], distances_a,
+                             n_basis, low, high, wrap, order, squared, beta, blended_units, proposal)
         for i in range(actions.shape[1]):
             noise = perturbation(row, i, gaussian)
             if wrap[i]:
@@ -252,6 +255,6 @@ def predict_kernel(observations, input_weights, action_weights, q, distances_a, 
     blended_units = np.empty(size, dtype=np.int64)
     for trial in range(observations.shape[0]):
         for o in range(observations.shape[1]):
-            _response(observations[trial, o], input_weights[trial], action_weights[trial], q[trial], 0.0,
-                      distances_a, n_basis, low, high, wrap, order, squared, beta, blended_units, out[trial, o])
+            _response(observations[trial, o], trial, input_weights, action_weights, q, 0.0, distances_a, n_basis,
+                      low, high, wrap, order, squared, beta, blended_units, out[trial, o])
 
