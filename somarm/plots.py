@@ -123,16 +123,25 @@ def draw_action_map(
     labels: tuple[str, str] = ("action 1 (normalised)", "action 2 (normalised)"),
     normalise: bool = True,
     join: bool = True,
+    periodic: np.ndarray | None = None,
 ) -> None:
     """Action units in (normalised) action space, shaded by their index in the map.
 
     2-D actions are drawn as points joined in map order (``join``); higher-dimensional ones as a
-    heat map of unit index against action dimension.
+    heat map of unit index against action dimension. ``periodic`` (a bool per action dimension)
+    marks dimensions whose low and high are one point (wrapped angles): a link between neighbours
+    that crosses that seam the short way is left out rather than drawn across the whole plot.
     """
     values = (weights - low) / (high - low) if normalise else weights
     if values.shape[1] == 2:
         if join:
-            ax.plot(values[:, 0], values[:, 1], color="0.6", lw=0.7, zorder=1)
+            line = values.astype(float)
+            if periodic is not None and np.any(periodic):
+                half = (np.asarray(high) - np.asarray(low)) / 2.0
+                seam = (np.abs(np.diff(weights, axis=0)) > half)[:, np.asarray(periodic, dtype=bool)].any(axis=1)
+                # A NaN row after each unit whose link to the next crosses the seam breaks the line there.
+                line = np.insert(line, np.flatnonzero(seam) + 1, np.nan, axis=0)
+            ax.plot(line[:, 0], line[:, 1], color="0.6", lw=0.7, zorder=1)
         ax.scatter(
             values[:, 0],
             values[:, 1],
@@ -211,6 +220,7 @@ def run_figures(result, out: Path) -> list[Path]:
         task.action_high,
         labels=action_labels,
         join=hasattr(learner, "q"),  # a Motoric Map's actions follow the input grid, not a chain
+        periodic=getattr(learner, "periodic_dimensions", None),
     )
     ax.set_title(
         f"action map (trial {first}), shaded by unit index"

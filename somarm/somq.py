@@ -142,6 +142,11 @@ class SOMQ(LearnerBase):
         self._outputs = np.zeros((self.n_trials, self.action_dim))
         self._shifted = np.zeros(self.n_trials, dtype=np.bool_)  # stays all False for the winner response
 
+    @property
+    def periodic_dimensions(self) -> np.ndarray:
+        """The action dimensions this learner wraps round (``periodic_actions`` and the task's declaration)."""
+        return self._wrap.copy()
+
     _STATE_ARRAYS = ("input_weights", "action_weights", "q")
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     _PENDING_ARRAYS = LearnerBase._PENDING_ARRAYS + ("_shifted",)

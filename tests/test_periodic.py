@@ -182,3 +182,18 @@ def test_the_setting_is_set_like_any_other():
     config = SOMQConfig().with_overrides({"periodic_actions": "true"})
     assert config.periodic_actions is True
     assert SOMQConfig.from_dict(config.to_dict()) == config
+
+
+def test_the_action_map_figure_does_not_draw_links_across_the_seam():
+    from somarm import plots
+
+    weights = np.array([[3.0, 0.0], [3.1, 0.1], [-3.1, 0.2], [-3.0, 0.3]])  # units 1-2 meet across +-pi
+    low, high = np.full(2, -np.pi), np.full(2, np.pi)
+    for periodic, gaps in ((np.array([True, False]), 1), (None, 0), (np.array([False, False]), 0)):
+        fig, ax = plots.plt.subplots()
+        plots.draw_action_map(ax, weights, low, high, periodic=periodic)
+        x = ax.lines[0].get_xdata()
+        assert np.isnan(x).sum() == gaps
+        if gaps:
+            assert np.isnan(x[2]) and len(x) == 5  # the break sits between units 1 and 2
+        plots.plt.close(fig)
