@@ -211,19 +211,3 @@ def test_reach_with_only_the_target_varied_is_the_closed_form_range():
     for _ in range(2):  # the range is computed once and then reused
         np.testing.assert_array_equal(task.reachable(observations), expected)
     assert 0 < expected.sum() < len(expected)
-
-
-def test_small_and_large_batches_pick_the_same_reachable_targets(monkeypatch):
-    from somarm.tasks import throw as throw_module
-
-    for name in ("throw_wind", "throw_mass"):
-        task = tasks.make(name, n_trials=3, seed=0)
-        rng = np.random.default_rng(5)
-        d = len(task.varied)
-        candidates = task.observation_low + (task.observation_high - task.observation_low) * rng.random((300, 16, d))
-        candidates[:7, :, 0] = 1000.0  # rows with no reachable candidate: X is pulled back
-        at_once = task._pick(candidates)
-        monkeypatch.setattr(throw_module, "_CHECK_AT_ONCE", 0)  # the column-by-column path
-        np.testing.assert_array_equal(task._pick(candidates), at_once)
-        monkeypatch.undo()
-        assert task.reachable(at_once[7:]).all() and (at_once[:7, 0] < 1000.0).all()

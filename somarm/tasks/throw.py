@@ -39,8 +39,6 @@ VARIED: dict[str, tuple[str, ...]] = {
     "throw_mass": ("X", "W", "Fr", "M"),
 }
 _CANDIDATES = 16
-#: Candidates checked in one call when a batch has at most this many (see ``Throw._pick``).
-_CHECK_AT_ONCE = 4096
 _PUNISHMENT = 2.0
 
 
@@ -212,25 +210,18 @@ class Throw(OneStepTask):
         with X pulled back to the farthest reachable landing.
         """
         n = len(candidates)
-        if candidates[:, :, 0].size <= _CHECK_AT_ONCE:
-            # A small batch (a training step): every candidate in one call, where the column loop
-            # below would pay numpy's per-call cost for each of several columns.
-            ok = self.reachable(candidates.reshape(-1, candidates.shape[2])).reshape(candidates.shape[:2])
-            first = np.argmax(ok, axis=1)
-            missed = ~ok.any(axis=1)
-        else:
-            first = np.zeros(n, dtype=np.intp)
-            missed = np.ones(n, dtype=bool)
-            pending = np.arange(n)
-            # Column by column, only for the rows still without a reachable candidate: most rows are
-            # settled by their first candidate, so the reach is rarely computed more than once.
-            for column in range(candidates.shape[1]):
-                ok = self.reachable(candidates[pending, column])
-                first[pending[ok]] = column
-                missed[pending[ok]] = False
-                pending = pending[~ok]
-                if pending.size == 0:
-                    break
+        first = np.zeros(n, dtype=np.intp)
+        missed = np.ones(n, dtype=bool)
+        pending = np.arange(n)
+        # Column by column, only for the rows still without a reachable candidate: nearly every
+        # row is settled by its first candidate, so the reach is rarely computed more than once.
+        for column in range(candidates.shape[1]):
+            ok = self.reachable(candidates[pending, column])
+            first[pending[ok]] = column
+            missed[pending[ok]] = False
+            pending = pending[~ok]
+            if pending.size == 0:
+                break
         chosen = candidates[np.arange(n), first].copy()
         if missed.any():
             c = self.conditions(chosen[missed])
