@@ -131,6 +131,7 @@ def _cmd_reproduce(args) -> int:
 
     runner.check_names(args.only)
     check_int("seeds", args.seeds)
+    check_int("--jobs", args.jobs)
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
     # into an earlier one: its REPORT.md and claims.json would then mix two runs).
@@ -138,7 +139,7 @@ def _cmd_reproduce(args) -> int:
     sigterm_as_interrupt()
     try:
         return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress,
-                                seeds=args.seeds, backend=args.backend)
+                                seeds=args.seeds, backend=args.backend, jobs=args.jobs)
     finally:
         owner.release()
 
@@ -216,6 +217,9 @@ def _parser() -> argparse.ArgumentParser:
                            help="run every experiment at N seeds; verdicts say in how many they hold (1)")
     reproduce.add_argument("--backend", default="mujoco", choices=("mujoco", "analytic"),
                            help="where rewards are computed: mujoco (default) or analytic (closed forms, quick)")
+    reproduce.add_argument("--jobs", type=int, default=1, metavar="N",
+                           help="experiments run at once, each in its own process (1: one after another, "
+                                "with progress bars)")
     reproduce.set_defaults(func=_cmd_reproduce)
 
     comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")

@@ -7,6 +7,7 @@
 """
 
 import os
+import subprocess
 
 import pytest
 
@@ -36,3 +37,20 @@ def pytest_make_collect_report(collector):
     # A module-level skip (``importorskip`` of a missing extra) is a skipped collection report.
     outcome = yield
     _fail_if_skipped(outcome.get_result())
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 1 MiB tmpfs (root only; CI requires it, see conftest.py); unmounted afterwards."""
+    if os.geteuid() != 0:
+        pytest.skip("a full disk is simulated with a small tmpfs, which needs root")
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(mount)], capture_output=True,
+                          text=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.strip()}")
+    try:
+        yield mount
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], check=False)

@@ -196,23 +196,6 @@ def test_viewer_port_in_use_and_bad_host_are_one_line(tmp_path, capsys):
 
 
 # -- a full disk -----------------------------------------------------------------------------------
-@pytest.fixture
-def small_disk(tmp_path):
-    """A 1 MiB tmpfs (root only; CI requires it, see conftest.py); unmounted afterwards."""
-    if os.geteuid() != 0:
-        pytest.skip("a full disk is simulated with a small tmpfs, which needs root")
-    mount = tmp_path / "disk"
-    mount.mkdir()
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(mount)], capture_output=True,
-                          text=True)
-    if done.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.strip()}")
-    try:
-        yield mount
-    finally:
-        subprocess.run(["umount", "-l", str(mount)], check=False)
-
-
 def _fill(disk: Path, leave: int) -> None:
     """Fill ``disk`` until only ``leave`` bytes (whole 4 KiB pages) are free."""
     free = os.statvfs(disk).f_bavail * os.statvfs(disk).f_frsize

@@ -18,7 +18,7 @@ from somarm.reproduce.report import Section, claim_record, merge_seeds, render
 from somarm.tasks.base import BACKENDS
 from somarm.validation import check_int
 
-__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
+__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "run_experiment", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -51,7 +51,7 @@ def check_names(only: list[str] | None) -> list[str]:
 
 def reproduce(
     out: Path, *, quick: bool = False, only: list[str] | None = None, seed: int = 0, progress: bool = True,
-    seeds: int = 1, backend: str = "mujoco",
+    seeds: int = 1, backend: str = "mujoco", jobs: int = 1,
 ) -> int:
     """Run the chosen experiments and write ``out/REPORT.md``, ``out/claims.json`` and the figures.
 
@@ -59,6 +59,8 @@ def reproduce(
       seeds: run every experiment at the seeds ``seed .. seed + seeds - 1`` (independent trial
         sets, trained in lockstep); each claim's verdict then reads "holds in k of N seeds".
       backend: where every reward is computed, "mujoco" (default) or "analytic" (closed forms).
+      jobs: experiments run at once, each in its own process (``somarm.reproduce.parallel``); 1
+        (default) runs them one after another in this process, with progress bars.
 
     Returns:
       0 when every experiment ran (whatever the verdicts), 130 when interrupted (the report then
@@ -70,6 +72,7 @@ def reproduce(
     """
     names = check_names(only)
     check_int("seeds", seeds)
+    check_int("jobs", jobs)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -78,15 +81,29 @@ def reproduce(
     sections: list[Section] = []
     start = time.perf_counter()
     status = 0
-    for name in names:
-        began = time.perf_counter()
-        trained: dict = {}  # one lockstep training for all seeds, consumed seed by seed
+
+    kept: list[tuple[int, Section]] = []  # (place in ``names``, section): workers finish in any order
+
+    def finished(name: str, section: Section) -> None:
+        """Keep a finished experiment (in the paper's order) and rewrite the report with it."""
+        kept.append((names.index(name), section))
+        sections[:] = [part for _, part in sorted(kept, key=lambda pair: pair[0])]
+        print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
+        _write(out, sections, total=time.perf_counter() - start, complete=False, **settings)
+
+    if jobs > 1:
+        from somarm.reproduce import parallel
+
         try:
-            parts = [
-                {**EXPERIMENTS, **OPTIONAL}[name](Context(out_dir=out, quick=quick, seed=s, progress=progress, backend=backend,
-                                          seeds=all_seeds if seeds > 1 else (), figures=i == 0, trained=trained))
-                for i, s in enumerate(all_seeds)
-            ]
+            status = parallel.run(names, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
+                                  finished=finished)
+        except ValueError as exc:  # a worker could not write (a full disk): keep the report so far
+            _keep_report(out, sections, total=time.perf_counter() - start, **settings)
+            raise ValueError(f"{exc}; the report keeps the {len(sections)} experiment(s) that finished") from None
+    for name in names if jobs == 1 else ():
+        began = time.perf_counter()
+        try:
+            section = run_experiment(name, out, quick=quick, seeds=all_seeds, progress=progress, backend=backend)
         except KeyboardInterrupt:
             print(
                 f"\ninterrupted during {name}; the report holds the experiments that finished",
@@ -98,11 +115,8 @@ def reproduce(
             _keep_report(out, sections, total=time.perf_counter() - start, **settings)
             raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
                              "experiment(s) that finished") from None
-        section = parts[0] if seeds == 1 else merge_seeds(parts, list(all_seeds))
         section.wall_time_s = time.perf_counter() - began
-        sections.append(section)
-        print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
-        _write(out, sections, total=time.perf_counter() - start, complete=False, **settings)
+        finished(name, section)
     total = time.perf_counter() - start
     _write(out, sections, total=total, complete=status == 0, **settings)
     held = sum(c.holds is True for s in sections for c in s.claims)
@@ -110,6 +124,20 @@ def reproduce(
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold{over}; {total:.1f} s)")
     return status
+
+
+def run_experiment(name: str, out: Path, *, quick: bool, seeds: tuple[int, ...], progress: bool,
+                   backend: str) -> Section:
+    """One experiment at every seed (one lockstep training for all seeds, consumed seed by seed),
+    its figures written into ``out/figures``; the seeds' sections merged when there are several."""
+    trained: dict = {}
+    parts = [
+        {**EXPERIMENTS, **OPTIONAL}[name](Context(out_dir=out, quick=quick, seed=s, progress=progress, backend=backend,
+                                                  seeds=seeds if len(seeds) > 1 else (), figures=i == 0,
+                                                  trained=trained))
+        for i, s in enumerate(seeds)
+    ]
+    return parts[0] if len(seeds) == 1 else merge_seeds(parts, list(seeds))
 
 
 def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:

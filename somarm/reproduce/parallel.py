@@ -1,0 +1,131 @@
+"""``somarm reproduce --jobs N``: experiments run at once, each in its own worker process.
+
+The experiments of a reproduction share nothing but the output folder (each writes its own
+figures), so N of them can run at once on N cores. Each runs in a fresh process (``spawn``), the
+longest first, with its physics on ``cores // N`` threads; it sends back its finished section, and
+this process alone writes the report, in the paper's order, after each one. A worker's results
+equal a run in this process: every experiment draws from its own seeds.
+
+Workers start with Ctrl-C ignored, so a Ctrl-C at the terminal (or SIGTERM, which the command
+turns into Ctrl-C) reaches this process alone, which then sends every worker SIGTERM: that stops a
+worker's training between two steps, as a run in the foreground stops, and the report keeps the
+experiments that had finished. A worker that cannot write a figure (a full disk) stops the others
+the same way and its one-line error is raised here.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import sys
+import time
+import traceback
+from collections.abc import Callable
+from multiprocessing.connection import wait
+from pathlib import Path
+
+from somarm.reproduce.report import Section
+
+__all__ = ["LONGEST_FIRST", "run"]
+
+#: Start order: the experiments that take longest at the paper's counts first, so that the short
+#: ones fill the other workers' time (names not listed start last, in the order given).
+LONGEST_FIRST = ("more_inputs", "delayed_reward", "beyond", "neighbourhood_q", "throw_maps", "four_goals",
+                 "reach2", "reach20", "throw", "peers")
+#: Seconds a stopped worker gets to finish its step and exit before it is killed.
+_GRACE_S = 60.0
+
+
+def _worker(connection, name: str, out: Path, quick: bool, seeds: tuple[int, ...], backend: str,
+            threads: int) -> None:
+    """Run one experiment and send ``("ok", section)`` or ``(kind, message)`` back."""
+    from somarm import tasks
+    from somarm.reproduce.runner import run_experiment
+    from somarm.stopping import sigterm_as_interrupt
+
+    sigterm_as_interrupt()
+    tasks.set_threads(threads)
+    began = time.perf_counter()
+    try:
+        section = run_experiment(name, out, quick=quick, seeds=seeds, progress=False, backend=backend)
+        section.wall_time_s = time.perf_counter() - began
+        connection.send(("ok", section))
+    except KeyboardInterrupt:
+        connection.send(("interrupted", ""))
+    except ValueError as exc:  # a one-line user-facing error (a full disk, say)
+        connection.send(("error", str(exc)))
+    except BaseException:  # a bug: its traceback goes to the parent, which shows it
+        connection.send(("crash", traceback.format_exc()))
+    finally:
+        connection.close()
+
+
+def run(names: list[str], out: Path, *, jobs: int, quick: bool, seeds: tuple[int, ...], backend: str,
+        finished: Callable[[str, Section], None]) -> int:
+    """Run ``names`` in up to ``jobs`` worker processes; ``finished(name, section)`` as each ends.
+
+    Returns:
+      0 when every experiment ran, 130 when interrupted (the finished ones were reported).
+
+    Raises:
+      ValueError: a worker's one-line error (its experiment stopped, the others were stopped).
+      RuntimeError: a worker crashed (its traceback in the message) or died without an answer.
+    """
+    context = multiprocessing.get_context("spawn")
+    threads = max(1, (os.cpu_count() or 1) // jobs)
+    waiting = sorted(names, key=lambda n: LONGEST_FIRST.index(n) if n in LONGEST_FIRST else len(LONGEST_FIRST))
+    running: dict = {}  # connection -> (name, process)
+    try:
+        while waiting or running:
+            while waiting and len(running) < jobs:
+                name = waiting.pop(0)
+                receive, send = context.Pipe(duplex=False)
+                process = context.Process(target=_worker, args=(send, name, out, quick, seeds, backend, threads),
+                                          name=f"somarm-{name}", daemon=True)
+                # Started while Ctrl-C is ignored, the worker inherits that (from its first instruction on).
+                previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+                try:
+                    process.start()
+                finally:
+                    signal.signal(signal.SIGINT, previous)
+                send.close()
+                running[receive] = (name, process)
+                print(f"{name}: started in process {process.pid}", file=sys.stderr, flush=True)
+            for connection in wait(list(running)):
+                name, process = running.pop(connection)
+                try:
+                    kind, payload = connection.recv()
+                except EOFError:
+                    process.join()
+                    kind, payload = "crash", f"its process ended without an answer (exit code {process.exitcode})"
+                process.join()
+                if kind == "ok":
+                    finished(name, payload)
+                elif kind == "interrupted":
+                    raise KeyboardInterrupt
+                elif kind == "error":
+                    raise ValueError(f"{payload}; {name} stopped, and so did the experiments running beside it")
+                else:
+                    raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
+    except KeyboardInterrupt:
+        print("\ninterrupted; the report holds the experiments that finished", file=sys.stderr)
+        return 130
+    finally:
+        _stop(running)
+    return 0
+
+
+def _stop(running: dict) -> None:
+    """SIGTERM to every worker still running, then wait for it (kill it after ``_GRACE_S``)."""
+    for _, process in running.values():
+        if process.is_alive():
+            os.kill(process.pid, signal.SIGTERM)
+    deadline = time.monotonic() + _GRACE_S
+    for connection, (_, process) in running.items():
+        process.join(max(0.0, deadline - time.monotonic()))
+        if process.is_alive():
+            process.kill()
+            process.join()
+        connection.close()
+    running.clear()
