@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from somarm import plots
+from somarm.reproduce.report import Section, merge_seeds
 from somarm.run import RunConfig, RunResult, final_rewards, train_group
 
 __all__ = [
@@ -17,6 +19,7 @@ __all__ = [
     "preset_choices",
     "run",
     "run_group",
+    "run_experiment",
     "typical_trial",
     "final_error",
     "fmt",
@@ -137,3 +140,17 @@ def fmt(x: float, digits: int = 3) -> str:
     if float(x).is_integer() and abs(x) < 1e7:
         return str(int(x))
     return f"{x:.{digits}g}" if abs(x) < 1e-3 or abs(x) >= 1e4 else f"{x:.{digits}f}"
+
+
+def run_experiment(experiment: Callable[[Context], Section], out: Path, *, quick: bool, seeds: tuple[int, ...],
+                   progress: bool, backend: str) -> Section:
+    """An experiment at every seed (one lockstep training for all seeds, consumed seed by seed), its
+    figures (the first seed's) written into ``out/figures``; the seeds' sections merged when there
+    are several."""
+    trained: dict = {}
+    parts = [
+        experiment(Context(out_dir=out, quick=quick, seed=s, progress=progress, backend=backend,
+                           seeds=seeds if len(seeds) > 1 else (), figures=i == 0, trained=trained))
+        for i, s in enumerate(seeds)
+    ]
+    return parts[0] if len(seeds) == 1 else merge_seeds(parts, list(seeds))

@@ -27,6 +27,7 @@ from collections.abc import Callable
 from multiprocessing.connection import wait
 from pathlib import Path
 
+from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section
 
 __all__ = ["LONGEST_FIRST", "run"]
@@ -39,18 +40,17 @@ LONGEST_FIRST = ("more_inputs", "delayed_reward", "beyond", "neighbourhood_q", "
 _GRACE_S = 60.0
 
 
-def _worker(connection, name: str, out: Path, quick: bool, seeds: tuple[int, ...], backend: str,
-            threads: int) -> None:
+def _worker(connection, experiment: Callable[[Context], Section], out: Path, quick: bool, seeds: tuple[int, ...],
+            backend: str, threads: int) -> None:
     """Run one experiment and send ``("ok", section)`` or ``(kind, message)`` back."""
     from somarm import tasks
-    from somarm.reproduce.runner import run_experiment
     from somarm.stopping import sigterm_as_interrupt
 
     sigterm_as_interrupt()
     tasks.set_threads(threads)
     began = time.perf_counter()
     try:
-        section = run_experiment(name, out, quick=quick, seeds=seeds, progress=False, backend=backend)
+        section = run_experiment(experiment, out, quick=quick, seeds=seeds, progress=False, backend=backend)
         section.wall_time_s = time.perf_counter() - began
         connection.send(("ok", section))
     except KeyboardInterrupt:
@@ -63,9 +63,10 @@ def _worker(connection, name: str, out: Path, quick: bool, seeds: tuple[int, ...
         connection.close()
 
 
-def run(names: list[str], out: Path, *, jobs: int, quick: bool, seeds: tuple[int, ...], backend: str,
-        finished: Callable[[str, Section], None]) -> int:
-    """Run ``names`` in up to ``jobs`` worker processes; ``finished(name, section)`` as each ends.
+def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs: int, quick: bool,
+        seeds: tuple[int, ...], backend: str, finished: Callable[[str, Section], None]) -> int:
+    """Run ``experiments`` (name -> experiment, module-level functions that a worker imports) in up to
+    ``jobs`` worker processes; ``finished(name, section)`` as each ends.
 
     Returns:
       0 when every experiment ran, 130 when interrupted (the finished ones were reported).
@@ -76,14 +77,15 @@ def run(names: list[str], out: Path, *, jobs: int, quick: bool, seeds: tuple[int
     """
     context = multiprocessing.get_context("spawn")
     threads = max(1, os.cpu_count() or 1)  # see the module docstring
-    waiting = sorted(names, key=lambda n: LONGEST_FIRST.index(n) if n in LONGEST_FIRST else len(LONGEST_FIRST))
+    waiting = sorted(experiments, key=lambda n: LONGEST_FIRST.index(n) if n in LONGEST_FIRST else len(LONGEST_FIRST))
     running: dict = {}  # connection -> (name, process)
     try:
         while waiting or running:
             while waiting and len(running) < jobs:
                 name = waiting.pop(0)
                 receive, send = context.Pipe(duplex=False)
-                process = context.Process(target=_worker, args=(send, name, out, quick, seeds, backend, threads),
+                process = context.Process(target=_worker,
+                                          args=(send, experiments[name], out, quick, seeds, backend, threads),
                                           name=f"somarm-{name}", daemon=True)
                 # Started while Ctrl-C is ignored, the worker inherits that (from its first instruction on).
                 previous = signal.signal(signal.SIGINT, signal.SIG_IGN)

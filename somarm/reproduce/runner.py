@@ -13,12 +13,12 @@ from somarm import __version__
 from somarm.compare import peers_missing
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.reproduce import arms, beyond, delayed, peers, throws
-from somarm.reproduce.common import Context
-from somarm.reproduce.report import Section, claim_record, merge_seeds, render
+from somarm.reproduce.common import Context, run_experiment
+from somarm.reproduce.report import Section, claim_record, render
 from somarm.tasks.base import BACKENDS
 from somarm.validation import check_int
 
-__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "run_experiment", "load_claims"]
+__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -95,7 +95,8 @@ def reproduce(
         from somarm.reproduce import parallel
 
         try:
-            status = parallel.run(names, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
+            experiments = {name: {**EXPERIMENTS, **OPTIONAL}[name] for name in names}
+            status = parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
                                   finished=finished)
         except ValueError as exc:  # a worker could not write (a full disk): keep the report so far
             _keep_report(out, sections, total=time.perf_counter() - start, **settings)
@@ -103,7 +104,8 @@ def reproduce(
     for name in names if jobs == 1 else ():
         began = time.perf_counter()
         try:
-            section = run_experiment(name, out, quick=quick, seeds=all_seeds, progress=progress, backend=backend)
+            section = run_experiment({**EXPERIMENTS, **OPTIONAL}[name], out, quick=quick, seeds=all_seeds,
+                                     progress=progress, backend=backend)
         except KeyboardInterrupt:
             print(
                 f"\ninterrupted during {name}; the report holds the experiments that finished",
@@ -124,20 +126,6 @@ def reproduce(
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold{over}; {total:.1f} s)")
     return status
-
-
-def run_experiment(name: str, out: Path, *, quick: bool, seeds: tuple[int, ...], progress: bool,
-                   backend: str) -> Section:
-    """One experiment at every seed (one lockstep training for all seeds, consumed seed by seed),
-    its figures written into ``out/figures``; the seeds' sections merged when there are several."""
-    trained: dict = {}
-    parts = [
-        {**EXPERIMENTS, **OPTIONAL}[name](Context(out_dir=out, quick=quick, seed=s, progress=progress, backend=backend,
-                                                  seeds=seeds if len(seeds) > 1 else (), figures=i == 0,
-                                                  trained=trained))
-        for i, s in enumerate(seeds)
-    ]
-    return parts[0] if len(seeds) == 1 else merge_seeds(parts, list(seeds))
 
 
 def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
