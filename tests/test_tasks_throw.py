@@ -183,7 +183,7 @@ def test_each_flight_takes_the_fewest_whole_steps_within_the_tolerance():
     throws = _random_throws(2000, 7)
     k = throws["Fr"] / throws["M"]
     step = flight.step_for(throws["ux"], throws["uy"], throws["W"], k, G=0.05)
-    T = flight.flight_time(throws["uy"], 0.05)
+    T = ballistics.flight_time(throws["uy"], 0.05)
     n = T / step
     np.testing.assert_allclose(n, np.round(n), rtol=0, atol=1e-9)  # the flight ends on a step's end
     assert (flight.error_bound(throws["ux"], throws["uy"], throws["W"], k, step, G=0.05)

@@ -46,6 +46,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
+from somarm.ballistics import flight_time
 from somarm.tasks.assets import model_path
 from somarm.tasks.pool import shared_pool
 
@@ -71,11 +72,6 @@ _FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
 THREADS = 2
 
 
-def flight_time(uy, G: float) -> np.ndarray:
-    """Time from launch at height 0 back to height 0, ``2 max(u_y, 0) / G``."""
-    return 2.0 * np.maximum(np.asarray(uy, dtype=np.float64), 0.0) / G
-
-
 def _bound(u0, k, T, n):
     """``u0 exp(-kT) expm1(n d) / k`` with ``d = exp(z) z^5 / 120``, ``z = k T / n`` (0 where k = 0)."""
     safe = np.where(k > 0.0, k, 1.0)
@@ -93,7 +89,7 @@ def error_bound(ux, uy, W, k, step, *, G: float) -> np.ndarray:
     inside the last step and ``|ux + W| k^3 h^4 / 384`` (the cubic Hermite term) is added.
     """
     k, h = np.asarray(k, dtype=np.float64), np.asarray(step, dtype=np.float64)
-    T = flight_time(uy, G)
+    T = flight_time(np.maximum(uy, 0.0), G)
     u0 = np.abs(np.asarray(ux) + W)
     steps = T / h
     whole = np.abs(steps - np.round(steps)) <= 1e-9 * np.maximum(steps, 1.0)
@@ -114,7 +110,7 @@ def step_for(ux, uy, W, k, *, G: float, tolerance: float = DEFAULT_TOLERANCE) ->
     if all(isinstance(a, float) for a in (ux, uy, W, k)):  # one throw (the dm_env path): no arrays
         return np.float64(_one_step(ux, uy, W, k, G, tolerance))
     ux, uy, W, k = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, uy, W, k)))
-    T = flight_time(uy, G)
+    T = flight_time(np.maximum(uy, 0.0), G)
     u0 = np.abs(ux + W)
     # The leading term u0 k^4 h^4 T exp(-kT) / 120 gives N; the exact bound then adds a step or two.
     lead = u0 * k ** 4 * T * np.exp(-k * T) / 120.0

@@ -161,11 +161,16 @@ class Throw(OneStepTask):
     def __init__(self, params: ThrowParams, *, name: str, **kwargs):
         self.name = name
         self.varied = VARIED[name]
+        # When no condition but the target varies, the velocity square's reach is one range for
+        # every episode: computed here once, not at every reset.
+        fixed = not {"Fr", "W", "M"} & set(self.varied)
+        self._fixed_range = (ballistics.landing_range(G=params.G, Fr=params.Fr, W=params.W, M=params.M)
+                             if fixed else None)
         if self.varied:
             low = np.array([RANGES[v][0] for v in self.varied])
             high = np.array([RANGES[v][1] for v in self.varied])
         else:
-            lowest, highest = ballistics.landing_range(G=params.G, Fr=params.Fr, W=params.W, M=params.M)
+            lowest, highest = self._fixed_range
             if not lowest <= params.X <= highest:
                 raise ValueError(f"target X = {params.X:g} is out of reach: throws from the velocity "
                                  f"square land between {float(lowest):.4g} and {float(highest):.4g}")
@@ -185,11 +190,8 @@ class Throw(OneStepTask):
     def reachable(self, observations: np.ndarray) -> np.ndarray:
         """Whether each observation's target lies within reach of the velocity square."""
         c = self.conditions(observations)
-        fixed = (self.params.G, c["Fr"], c["W"], c["M"])
-        if all(isinstance(v, float) for v in fixed):  # only X varies: one range, computed once
-            if getattr(self, "_range", (None,))[0] != fixed:
-                self._range = (fixed, ballistics.landing_range(G=fixed[0], Fr=fixed[1], W=fixed[2], M=fixed[3]))
-            lowest, highest = self._range[1]
+        if self._fixed_range is not None:
+            lowest, highest = self._fixed_range
         else:
             lowest, highest = ballistics.landing_range(G=self.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
         return (lowest <= c["X"]) & (c["X"] <= highest)
