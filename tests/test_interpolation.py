@@ -4,15 +4,14 @@ import dataclasses
 
 import numpy as np
 import pytest
+from somq_cases import BOUNDS, small_config
+from somq_cases import arc as _arc
 
 from somarm import interpolation
 from somarm.reference import ReferenceSOMQ, interpolated_response
-from somarm.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.somq import SOMQ, SOMQConfig
 
 BOX1 = dict(observation_low=[0.0], observation_high=[3.0], action_low=[-1.0, -1.0], action_high=[1.0, 1.0])
-BOUNDS = dict(observation_low=[0.0, -1.0], observation_high=[1.0, 1.0], action_low=[-1.0, 0.0, -2.0],
-              action_high=[1.0, 1.0, 2.0])
 
 
 def _planted(**changes):
@@ -102,17 +101,7 @@ def test_an_exploring_step_is_the_papers_step():
 
 
 def _config(input_shape, neighbourhood_q, gamma, noise="uniform"):
-    fast = InverseDecay(50.0)  # anneal within the test so late, narrow-neighbourhood steps are covered
-    return SOMQConfig(
-        input_shape=input_shape, action_shape=(7,), alpha=Schedule(0.9, fast), lambda_s=Schedule(0.8, fast),
-        lambda_a=Schedule(0.7, fast, floor=0.05), n_s=Schedule(3.0, fast), n_a=Schedule(2.5, fast),
-        p=Schedule(0.6, fast), epsilon=Schedule(0.4, ExponentialDecay(0.99), floor=0.01), gamma=gamma,
-        neighbourhood_q=neighbourhood_q, noise=noise, response="interpolated",
-    )
-
-
-def _arc(difference, period):
-    return difference - period * np.floor(difference / period + 0.5)
+    return small_config(input_shape, neighbourhood_q, gamma, noise, response="interpolated")
 
 
 @pytest.mark.parametrize("input_shape", [(6,), (3, 4), (1,)], ids=["1d", "2d", "one-unit"])

@@ -4,23 +4,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from somq_cases import BOUNDS
+from somq_cases import arc as _arc
+from somq_cases import small_config as _config
 
 from somarm.reference import ReferenceSOMQ
-from somarm.schedules import ExponentialDecay, InverseDecay, Schedule
-from somarm.somq import SOMQ, SOMQConfig
-
-BOUNDS = dict(observation_low=[0.0, -1.0], observation_high=[1.0, 1.0], action_low=[-1.0, 0.0, -2.0],
-              action_high=[1.0, 1.0, 2.0])
-
-
-def _config(input_shape, neighbourhood_q, gamma, noise="uniform"):
-    fast = InverseDecay(50.0)  # anneal within the test so late, narrow-neighbourhood steps are covered
-    return SOMQConfig(
-        input_shape=input_shape, action_shape=(7,), alpha=Schedule(0.9, fast), lambda_s=Schedule(0.8, fast),
-        lambda_a=Schedule(0.7, fast, floor=0.05), n_s=Schedule(3.0, fast), n_a=Schedule(2.5, fast),
-        p=Schedule(0.6, fast), epsilon=Schedule(0.4, ExponentialDecay(0.99), floor=0.01), gamma=gamma,
-        neighbourhood_q=neighbourhood_q, noise=noise,
-    )
+from somarm.somq import SOMQ
 
 
 def _run_both(config, *, n_trials=3, n_steps=150, seed=11):
@@ -84,10 +73,6 @@ def test_relative_epsilon_equals_reference_exactly():
 
 #: Dimensions 0 and 2 as circles (their low and high one point), dimension 1 a plain interval.
 PERIODIC = [True, False, True]
-
-
-def _arc(difference, period):
-    return difference - period * np.floor(difference / period + 0.5)
 
 
 @pytest.mark.parametrize("noise", ["uniform", "gaussian"])
