@@ -109,7 +109,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                 elif kind == "interrupted":
                     raise KeyboardInterrupt
                 elif kind == "error":
-                    raise ValueError(f"{payload}; {name} stopped, and so did the experiments running beside it")
+                    raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
                 else:
                     raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
     except KeyboardInterrupt:

@@ -80,45 +80,28 @@ def reproduce(
     settings = {"quick": quick, "seeds": list(all_seeds), "backend": backend}
     sections: list[Section] = []
     start = time.perf_counter()
-    status = 0
-
     kept: list[tuple[int, Section]] = []  # (place in ``names``, section): workers finish in any order
 
     def finished(name: str, section: Section) -> None:
-        """Keep a finished experiment (in the paper's order) and rewrite the report with it."""
+        """Keep a finished experiment (in the order asked) and rewrite the report with it."""
         kept.append((names.index(name), section))
         sections[:] = [part for _, part in sorted(kept, key=lambda pair: pair[0])]
         print(f"{name}: {section.wall_time_s:.1f} s", file=sys.stderr, flush=True)
         _write(out, sections, total=time.perf_counter() - start, complete=False, **settings)
 
-    if jobs > 1:
-        from somarm.reproduce import parallel
+    experiments = {name: {**EXPERIMENTS, **OPTIONAL}[name] for name in names}
+    try:
+        if jobs > 1:
+            from somarm.reproduce import parallel
 
-        try:
-            experiments = {name: {**EXPERIMENTS, **OPTIONAL}[name] for name in names}
             status = parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
                                   finished=finished)
-        except ValueError as exc:  # a worker could not write (a full disk): keep the report so far
-            _keep_report(out, sections, total=time.perf_counter() - start, **settings)
-            raise ValueError(f"{exc}; the report keeps the {len(sections)} experiment(s) that finished") from None
-    for name in names if jobs == 1 else ():
-        began = time.perf_counter()
-        try:
-            section = run_experiment({**EXPERIMENTS, **OPTIONAL}[name], out, quick=quick, seeds=all_seeds,
-                                     progress=progress, backend=backend)
-        except KeyboardInterrupt:
-            print(
-                f"\ninterrupted during {name}; the report holds the experiments that finished",
-                file=sys.stderr,
-            )
-            status = 130
-            break
-        except ValueError as exc:  # a figure that cannot be written (a full disk): keep the report so far
-            _keep_report(out, sections, total=time.perf_counter() - start, **settings)
-            raise ValueError(f"{exc}; {name} stopped, the report keeps the {len(sections)} "
-                             "experiment(s) that finished") from None
-        section.wall_time_s = time.perf_counter() - began
-        finished(name, section)
+        else:
+            status = _run_in_turn(experiments, out, quick=quick, seeds=all_seeds, progress=progress,
+                                  backend=backend, finished=finished)
+    except ValueError as exc:  # an experiment could not write (a full disk): keep the report so far
+        _keep_report(out, sections, total=time.perf_counter() - start, **settings)
+        raise ValueError(f"{exc}, the report keeps the {len(sections)} experiment(s) that finished") from None
     total = time.perf_counter() - start
     _write(out, sections, total=total, complete=status == 0, **settings)
     held = sum(c.holds is True for s in sections for c in s.claims)
@@ -126,6 +109,28 @@ def reproduce(
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
     print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold{over}; {total:.1f} s)")
     return status
+
+
+def _run_in_turn(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quick: bool,
+                 seeds: tuple[int, ...], progress: bool, backend: str,
+                 finished: Callable[[str, Section], None]) -> int:
+    """The experiments one after another in this process (with progress bars); 130 when interrupted.
+
+    Raises:
+      ValueError: an experiment's one-line error, naming the experiment that stopped.
+    """
+    for name, experiment in experiments.items():
+        began = time.perf_counter()
+        try:
+            section = run_experiment(experiment, out, quick=quick, seeds=seeds, progress=progress, backend=backend)
+        except KeyboardInterrupt:
+            print(f"\ninterrupted during {name}; the report holds the experiments that finished", file=sys.stderr)
+            return 130
+        except ValueError as exc:
+            raise ValueError(f"{exc}; {name} stopped") from None
+        section.wall_time_s = time.perf_counter() - began
+        finished(name, section)
+    return 0
 
 
 def _keep_report(out: Path, sections: list[Section], **kwargs) -> None:
