@@ -173,10 +173,35 @@ def test_chunks_cover_the_sorted_batch_in_order_and_respect_the_size():
         assert bounds[0][0] == 0 and bounds[-1][1] == n
         assert all(a < b <= a + size for a, b in bounds)
         assert all(b == a2 for (_, b), (a2, _) in zip(bounds, bounds[1:], strict=False))
-    # Large batches use (nearly) full chunks; a small one is cut into a few chunks of similar flights.
-    sizes = np.diff(np.array(flight._partition(np.sort(rng.uniform(0, 160, 3000)), 256)), axis=1)
-    assert sizes[sizes >= 200].sum() >= 0.8 * 3000
-    assert 1 < len(flight._partition(np.sort(rng.uniform(0, 160, 100)), 256)) < 10
+    # The cut is the cheapest under the cost model: a brute force over every cut of small batches
+    # agrees, and a large batch costs no more than cut into full chunks.
+    def cost(lengths, bounds):
+        steps = np.ceil(lengths - 1e-9) + 1.0
+        return sum(flight._chunk_cost(steps, a, b) for a, b in bounds)
+
+    for n in (1, 5, 9):
+        lengths = np.sort(rng.uniform(0.0, 60.0, n))
+        every = []
+        for mask in range(2 ** (n - 1)):  # bit i set: a cut after flight i
+            cuts = [0] + [i + 1 for i in range(n - 1) if mask >> i & 1] + [n]
+            every.append(cost(lengths, list(zip(cuts, cuts[1:], strict=False))))
+        assert cost(lengths, flight._partition(lengths, 256)) == pytest.approx(min(every))
+    lengths = np.sort(rng.uniform(0, 160, 3000))
+    full = [(a, min(a + 256, 3000)) for a in range(0, 3000, 256)]
+    assert cost(lengths, flight._partition(lengths, 256)) < cost(lengths, full)
+
+
+def test_a_schedule_covers_the_batch_once_over_its_threads():
+    rng = np.random.default_rng(3)
+    for n, workers in ((1, 2), (20, 2), (100, 2), (400, 3), (100, 1)):
+        lengths = np.sort(rng.uniform(0.0, 45.0, n))
+        shares, longest = flight._schedule(lengths, 256, workers)
+        assert 1 <= len(shares) <= workers
+        covered = sorted(bound for share in shares for bound in share)
+        assert covered[0][0] == 0 and covered[-1][1] == n
+        assert all(b == a2 for (_, b), (a2, _) in zip(covered, covered[1:], strict=False))
+        steps = np.ceil(lengths - 1e-9) + 1.0
+        assert longest == pytest.approx(max(sum(flight._chunk_cost(steps, a, b) for a, b in s) for s in shares))
 
 
 def test_each_flight_takes_the_fewest_whole_steps_within_the_tolerance():

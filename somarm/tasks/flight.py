@@ -43,6 +43,7 @@ import math
 import threading
 
 import mujoco
+import numba
 import numpy as np
 from mujoco import rollout as mj_rollout
 
@@ -61,11 +62,15 @@ MAX_KH = 1.0
 #: The models' own step: a throw of step c runs in the time t / c (see the module docstring).
 SCALED_STEP = 1.0
 _CHUNK = 256
-#: The fixed cost of one model step in projectile-steps (measured: about 7 us per RK4 step of a
-#: model, 0.7 us per projectile in it); it decides how finely a small batch is cut.
-_STEP_COST = 10.0
+#: The fixed cost of one model step, and of one native call with its set-up and landing, in
+#: projectile-steps (measured: about 6 us per RK4 step of a model, 0.9 us per projectile in it,
+#: and some 40 us per call); they decide how finely a small batch is cut.
+_STEP_COST = 7.0
+_CALL_COST = 40.0
 #: Projectiles per model: a chunk runs in the smallest of these that holds it (few models built).
-_SIZES = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256)
+_SIZES = (*range(1, 17), *range(20, 65, 4), *range(80, 257, 16))
+#: ``_SIZE_OF[m]``: the model size for a chunk of ``m`` (index 0 unused).
+_SIZE_OF = np.array([0] + [min(s for s in _SIZES if s >= m) for m in range(1, _SIZES[-1] + 1)])
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
 #: Threads for batches of more than one chunk (2 by default: a small machine); see ``tasks.set_threads``.
@@ -296,7 +301,7 @@ class ProjectileBatch:
     """
 
     def __init__(self, n: int, *, G: float):
-        base = mujoco.MjModel.from_xml_path(str(model_path("launcher")))
+        base = _base_model()
         inertia = " ".join(f"{v:.17g}" for v in base.body("projectile").inertia)
         projectiles = "".join(
             f'<body name="projectile{i}"><inertial pos="0 0 0" mass="1" diaginertia="{inertia}"/>'
@@ -316,33 +321,87 @@ class ProjectileBatch:
         self._n_state = mujoco.mj_stateSize(self.model, _STATE)
         self._qpos = slice(1, 1 + self.model.nq)  # a full-physics state is (time, qpos, qvel, ...)
         self._qvel = slice(1 + self.model.nq, 1 + self.model.nq + self.model.nv)
+        # Reused buffers: the x dofs' damping (a view of the model), the launch state, and one
+        # step's applied force (the wind's share of the drag).
+        self._damping = self.model.dof_damping[self._x]
+        self._launch = np.zeros((1, self._n_state))
+        self._ux = self._launch[0, self._qvel][self._x]
+        self._lift = self._launch[0, self._qvel][self._z]
+        self._force = np.zeros(self.model.nv)
+        self._wind = self._force[self._x]
 
     def land(self, ux, uy, k, W, scale) -> np.ndarray:
         """Landing x for up to ``n`` throws (1-D arrays of length ``m <= n``; ``k`` = Fr / M, ``scale`` each
         throw's RK4 step), simulated in one native rollout."""
+        out = np.empty(len(ux))
+        self.land_into(out, ux, uy, k, W, scale)
+        return out
+
+    def land_into(self, out, ux, uy, k, W, scale) -> None:
+        """``land`` written into ``out`` (length ``m``): the batch's hot path, few NumPy calls."""
         m = len(ux)
         model = self.model
-        rate = np.asarray(scale) * k
-        damping = np.zeros(self.n)
-        damping[:m] = rate
-        model.dof_damping[self._x] = damping
-        force = np.zeros((1, 1, model.nv))
-        force[0, 0, self._x][:m] = -rate * W
-        launch = np.zeros((1, self._n_state))
-        velocity = launch[0, self._qvel]
-        velocity[self._x][:m] = ux
-        lift = np.asarray(uy) / scale
-        velocity[self._z][:m] = lift  # unused slots stay at rest and land in the first step
-        steps = max_steps_for(float(np.max(lift, initial=0.0)), G=self.G, dt=SCALED_STEP)
+        rate = scale * k
+        self._damping[:m] = rate
+        self._damping[m:] = 0.0
+        self._wind[:m] = -rate * W
+        self._wind[m:] = 0.0
+        self._ux[:m] = ux
+        self._ux[m:] = 0.0
+        lift = uy / scale
+        self._lift[:m] = lift  # unused slots stay at rest and land in the first step
+        self._lift[m:] = 0.0
+        steps = max_steps_for(float(lift.max()), G=self.G, dt=SCALED_STEP)
+        force = np.empty((1, steps, model.nv))
+        force[0] = self._force
         states = np.empty((1, steps + 1, self._n_state))
-        states[0, 0] = launch[0]
-        mj_rollout.rollout([model], [self.data], launch, np.broadcast_to(force, (1, steps, model.nv)).copy(),
-                           control_spec=_FORCE, nstep=steps, state=states[:, 1:], skip_checks=True)
-        positions, velocities = states[0, :, self._qpos], states[0, :, self._qvel]
-        if positions[-1, self._z][:m].max() > 0.0:
+        states[0, 0] = self._launch[0]
+        mj_rollout.rollout([model], [self.data], self._launch, force, control_spec=_FORCE, nstep=steps,
+                           state=states[:, 1:], skip_checks=True)
+        if not _land_rows(states[0], m, 1, 1 + model.nq, self.G, SCALED_STEP, scale, out):
             raise RuntimeError(f"projectile(s) still flying after {steps} steps")
-        landing, _, _ = _landings(positions, velocities, self._x, self._z, gravity=self.G, dt=SCALED_STEP)
-        return landing[:m] * scale
+
+
+@numba.njit(cache=True, nogil=True)
+def _land_rows(states, m, qpos, qvel, gravity, dt, scale, out):
+    """``_landings`` of a rollout's rows for projectiles ``0..m-1`` (dofs 2i and 2i+1), times
+    ``scale``, into ``out``: the same arithmetic in the same order (no fastmath), compiled.
+
+    Returns False if a projectile is still above the ground in the last row.
+    """
+    rows = states.shape[0]
+    for i in range(m):
+        x, z = 2 * i, 2 * i + 1
+        after = 1
+        while after < rows and states[after, qpos + z] > 0.0:
+            after += 1
+        if after == rows:
+            return False
+        before = after - 1
+        z0, w0 = states[before, qpos + z], states[before, qvel + z]
+        x0, v0 = states[before, qpos + x], states[before, qvel + x]
+        x1, v1 = states[after, qpos + x], states[after, qvel + x]
+        disc = math.sqrt(max(w0 * w0 + 2.0 * gravity * z0, 0.0))
+        if w0 >= 0.0:
+            tau = (w0 + disc) / gravity
+        else:
+            tau = 2.0 * z0 / (disc - w0)
+        s = min(max(tau / dt, 0.0), 1.0)
+        s2 = s * s
+        s3 = s2 * s
+        out[i] = ((2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * dt * v0
+                  + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * dt * v1) * scale[i]
+    return True
+
+
+_base: list[mujoco.MjModel] = []
+
+
+def _base_model() -> mujoco.MjModel:
+    """``models/launcher.xml``, parsed once (its options and inertia shape every batch model)."""
+    if not _base:
+        _base.append(mujoco.MjModel.from_xml_path(str(model_path("launcher"))))
+    return _base[0]
 
 
 _local = threading.local()
@@ -359,37 +418,89 @@ def _batch_for_thread(n: int, G: float) -> ProjectileBatch:
 
 def _model_size(m: int) -> int:
     """Projectiles in the model for a chunk of ``m``: the smallest of ``_SIZES`` that holds it."""
-    for size in _SIZES:
-        if size >= m:
-            return size
-    return m
+    return int(_SIZE_OF[m]) if m < len(_SIZE_OF) else m
+
+
+@numba.njit(cache=True)
+def _cut(steps, size_of, cap, step_cost, call_cost):
+    """Cheapest cut of ascending flights into chunks of at most ``cap`` (dynamic programming).
+
+    A chunk ``[a, b)`` costs ``call_cost + steps[b - 1] * (step_cost + size_of[b - a])``: one
+    native call, then its longest flight's steps, each a fixed cost plus one per projectile of
+    its model. Returns each prefix's best last-chunk start (``start[b]`` for the chunk ending at b).
+    """
+    n = steps.shape[0]
+    best = np.empty(n + 1)
+    best[0] = 0.0
+    start = np.zeros(n + 1, np.int64)
+    for b in range(1, n + 1):
+        lowest = np.inf
+        where = 0
+        for a in range(max(0, b - cap), b):
+            cost = best[a] + call_cost + steps[b - 1] * (step_cost + size_of[b - a])
+            if cost < lowest:
+                lowest = cost
+                where = a
+        best[b] = lowest
+        start[b] = where
+    return start
 
 
 def _partition(lengths: np.ndarray, size: int) -> list[tuple[int, int]]:
     """Chunks ``(start, stop)`` of ascending flight lengths (in model steps), at most ``size`` each.
 
-    A chunk costs its longest flight's steps times (``_STEP_COST`` + its projectiles). From the
-    longest flights down, each chunk starts where it and the rest, counted as one more chunk,
-    cost least: a few chunks of similar flights for small batches, full chunks for large ones.
+    The cut with least cost (``_cut``): a chunk pays a native call, then per step a fixed cost
+    and one per projectile of its model (``_SIZES``, so a few models serve every chunk). Small
+    batches come out as a few chunks of similar flights, large ones as full chunks.
     """
-    steps = np.ceil(lengths) + 2.0
+    steps = np.ceil(np.asarray(lengths, dtype=np.float64) - 1e-9) + 1.0
+    cap = max(1, min(int(size), len(_SIZE_OF) - 1))
+    start = _cut(steps, _SIZE_OF.astype(np.float64), cap, _STEP_COST, _CALL_COST)
     bounds = []
     stop = len(steps)
     while stop > 0:
-        starts = np.arange(max(0, stop - size), stop)
-        rest = np.where(starts > 0, steps[starts - 1] * (_STEP_COST + starts), 0.0)
-        cost = steps[stop - 1] * (_STEP_COST + stop - starts) + rest
-        start = int(starts[np.argmin(cost)])
-        bounds.append((start, stop))
-        stop = start
+        bounds.append((int(start[stop]), stop))
+        stop = bounds[-1][0]
     return bounds[::-1]
 
 
-def _run_chunks(chunks: list[np.ndarray], arrays, out: np.ndarray, G: float) -> None:
+def _chunk_cost(steps: np.ndarray, a: int, b: int) -> float:
+    return _CALL_COST + float(steps[b - 1]) * (_STEP_COST + _model_size(b - a))
+
+
+def _schedule(lengths: np.ndarray, chunk: int, workers: int) -> tuple[list[list[tuple[int, int]]], float]:
+    """Chunks of the sorted flights shared between ``workers`` threads, and the longest share's cost.
+
+    Each share takes the next longest chunk while it is the least loaded. With several threads a
+    cut into smaller chunks can finish sooner than the cheapest cut, so caps of a half, a third and
+    a quarter of the batch are tried too, and the schedule that ends first is kept.
+    """
+    steps = np.ceil(lengths - 1e-9) + 1.0
+    n = len(lengths)
+    caps = {chunk} if workers == 1 else {chunk, *(max(1, -(-n // d)) for d in (workers, 2 * workers, 3 * workers))}
+    best: tuple[list[list[tuple[int, int]]], float] | None = None
+    for cap in sorted(caps, reverse=True):
+        if cap > chunk:
+            continue
+        bounds = _partition(lengths, cap)
+        cost = [_chunk_cost(steps, a, b) for a, b in bounds]
+        shares: list[list[tuple[int, int]]] = [[] for _ in range(workers)]
+        load = [0.0] * workers
+        for i in sorted(range(len(bounds)), key=lambda i: -cost[i]):
+            w = load.index(min(load))
+            shares[w].append(bounds[i])
+            load[w] += cost[i]
+        if best is None or max(load) < best[1]:
+            best = ([s for s in shares if s], max(load))
+    return best
+
+
+def _run_chunks(bounds: list[tuple[int, int]], arrays, out: np.ndarray, G: float) -> None:
+    """Land the sorted throws ``[a, b)`` of each chunk into ``out`` (sorted order)."""
     ux, uy, k, W, scale = arrays
-    for idx in chunks:
-        batch = _batch_for_thread(_model_size(len(idx)), G)
-        out[idx] = batch.land(ux[idx], uy[idx], k[idx], W[idx], scale[idx])
+    for a, b in bounds:
+        batch = _batch_for_thread(_model_size(b - a), G)
+        batch.land_into(out[a:b], ux[a:b], uy[a:b], k[a:b], W[a:b], scale[a:b])
 
 
 def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float = DEFAULT_TOLERANCE,
@@ -410,31 +521,25 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
     shape = arrays[0].shape
     ux_, uy_, Fr_, W_, M_ = (np.ascontiguousarray(a).ravel() for a in arrays)
     total = ux_.size
-    out = np.empty(total)
     if total == 0:
-        return out.reshape(shape)
+        return np.empty(shape)
     k = Fr_ / M_
     scale = step_for(ux_, uy_, W_, k, G=G, tolerance=tolerance)
     lengths = 2.0 * (uy_ / scale) / (G * SCALED_STEP)  # flight in model steps
     order = np.argsort(lengths, kind="stable")
-    bounds = _partition(lengths[order], max(1, chunk))
-    chunks = [order[a:b] for a, b in bounds]
-    flat = (ux_, uy_, k, W_, scale)
-    workers = max(1, min(THREADS if n_threads is None else n_threads, len(chunks)))
-    if workers == 1:
-        _run_chunks(chunks, flat, out, G)
-        return out.reshape(shape)
-    # Longest work first, each chunk to the least loaded thread.
-    cost = [(math.ceil(lengths[order[b - 1]]) + 2) * (_STEP_COST + b - a) for a, b in bounds]
-    shares: list[list[np.ndarray]] = [[] for _ in range(workers)]
-    load = [0.0] * workers
-    for i in sorted(range(len(chunks)), key=lambda i: -cost[i]):
-        w = load.index(min(load))
-        shares[w].append(chunks[i])
-        load[w] += cost[i]
-    pool = shared_pool(workers)
-    futures = [pool.submit(_run_chunks, share, flat, out, G) for share in shares[1:]]
-    _run_chunks(shares[0], flat, out, G)  # the calling thread takes a share too
-    for future in futures:
-        future.result()
+    # The throws in flight order, so that every chunk is a slice (a view, no gathering).
+    flat = tuple(a[order] for a in (ux_, uy_, k, W_, scale))
+    landed = np.empty(total)
+    workers = max(1, THREADS if n_threads is None else n_threads)
+    shares, _ = _schedule(lengths[order], max(1, chunk), workers)
+    if len(shares) == 1:
+        _run_chunks(shares[0], flat, landed, G)
+    else:
+        pool = shared_pool(len(shares))
+        futures = [pool.submit(_run_chunks, share, flat, landed, G) for share in shares[1:]]
+        _run_chunks(shares[0], flat, landed, G)  # the calling thread takes a share too
+        for future in futures:
+            future.result()
+    out = np.empty(total)
+    out[order] = landed
     return out.reshape(shape)
