@@ -3,6 +3,8 @@
 These kernels are the fast path of ``somarm.somq.SOMQ``. They do the same arithmetic in the
 same order as ``somarm.reference.ReferenceSOMQ`` (no fastmath), so both give bit-identical
 results. Units whose neighbourhood value is 0 are skipped: their update would add exactly 0.
+They release the GIL (``nogil``), so learners stepped in different threads (the lanes of a
+lockstep group, ``somarm.training``) run side by side.
 
 ``wrap (action_dim,)`` bools mark the action dimensions treated as circles (``periodic_actions``):
 there the box's low and high are one point, actions wrap round instead of being clipped, and the
@@ -21,7 +23,7 @@ __all__ = ["all_finite", "nearest_unit", "perturbation", "wrapped", "arc", "act_
 _TWO_PI = 2.0 * math.pi
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def all_finite(values):
     """True if no element of ``values`` (any shape) is NaN or inf; cheaper than NumPy on small arrays."""
     for value in values.flat:
@@ -30,7 +32,7 @@ def all_finite(values):
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nearest_unit(x, weights):
     """Index of the row of ``weights (n_units, dim)`` nearest ``x`` (squared distance), ties to the lowest."""
     best = np.inf
@@ -46,7 +48,7 @@ def nearest_unit(x, weights):
     return j
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def perturbation(row, i, gaussian):
     """The unit-scale noise of action dimension ``i`` from a row of uniforms: a standard normal
     (Box-Muller on ``row[3 + 2i], row[4 + 2i]``) or uniform in [-1, 1) (``row[3 + i]``)."""
@@ -57,7 +59,7 @@ def perturbation(row, i, gaussian):
     return 2.0 * row[3 + i] - 1.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def wrapped(value, low, high):
     """``value`` moved by whole periods ``high - low`` into [low, high]; a value inside stays as it is."""
     if low <= value <= high:
@@ -67,13 +69,13 @@ def wrapped(value, low, high):
     return min(max(value, low), high)  # rounding may land a hair outside
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def arc(difference, period):
     """``difference`` moved by whole periods into [-period/2, period/2): the shorter way round a circle."""
     return difference - period * math.floor(difference / period + 0.5)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _pull(weights, x, rate, psi):
     """The SOM update of one map towards ``x``: ``w += rate * psi * (x - w)`` where psi > 0, in place."""
     for m in range(weights.shape[0]):
@@ -84,7 +86,7 @@ def _pull(weights, x, rate, psi):
                 weights[m, i] = w + step * (x[i] - w)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _pull_action(weights, x, rate, psi, wrap, low, high):
     """``_pull`` of the action map: along the shorter arc, and wrapped back into the box, where ``wrap``."""
     for m in range(weights.shape[0]):
@@ -98,7 +100,7 @@ def _pull_action(weights, x, rate, psi, wrap, low, high):
                     weights[m, i] = w + step * (x[i] - w)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _shift(weights, k, target, rate, psi, low, high, wrap):
     """Move every unit by ``rate * psi * (target - w_k)`` where psi > 0, kept inside [low, high]: the
     neighbourhood of unit k shifted by unit k's own SOM step, not pulled towards one point, in place.
@@ -116,7 +118,7 @@ def _shift(weights, k, target, rate, psi, low, high, wrap):
                 weights[m, i] = min(max(weights[m, i] + rate * psi[m] * delta, low[i]), high[i])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, wrap,
                gaussian, winners, units, actions):
     """Steps 1 to 5 for every trial; fills ``winners``, ``units`` and ``actions`` in place.
@@ -161,7 +163,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         units[trial] = k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, winners, units, actions,
                  input_weights, action_weights, q, alpha, lambda_s, lambda_a, n_s, n_a,
                  distances_s, distances_a, neighbourhood_q, shifted, low, high, wrap):

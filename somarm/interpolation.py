@@ -68,7 +68,7 @@ def n_basis_for(input_shape: tuple[int, ...]) -> int:
     return min(len(input_shape) + 1, int(np.prod(input_shape)))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _nearest(x, weights, trial, order, squared):
     """Fill ``order``/``squared`` with the ``len(order)`` units of ``weights[trial]`` nearest ``x``,
     ascending (ties: lower index)."""
@@ -97,7 +97,7 @@ def _nearest(x, weights, trial, order, squared):
             worst = squared[size - 1]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _greedy(q, trial, j, tie):
     """The action unit with the best ``q[trial, j]``; ties broken by the uniform number ``tie`` (0:
     lowest index).
@@ -128,7 +128,7 @@ def _greedy(q, trial, j, tie):
     return best
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _exploring_unit(q, trial, j, u, tie, distances_a):
     """Step 2 when exploring: with probability NEIGHBOUR_SHARE (``u`` below it) a grid neighbour of the
     greedy unit, else (``u`` rescaled) a random unit as in the paper."""
@@ -151,7 +151,7 @@ def _exploring_unit(q, trial, j, u, tie, distances_a):
     return best
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _response(x, trial, input_weights, action_weights, q, tie, distances_a, n_basis, low, high, wrap, order,
               squared, beta, units, out):
     """The blended greedy action of trial ``trial`` for ``x`` into ``out``; returns (winner j, its greedy unit k)."""
@@ -200,7 +200,7 @@ def _response(x, trial, input_weights, action_weights, q, tie, distances_a, n_ba
     return order[0], k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, wrap, gaussian,
                distances_a, n_basis, winners, units, actions, targets, shifted):
     """Steps 1 to 5 with the interpolated response, for every trial, in place.
@@ -244,7 +244,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         units[trial] = k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def predict_kernel(observations, input_weights, action_weights, q, distances_a, n_basis, low, high, wrap, out):
     """Greedy interpolated responses, ties to the lowest index: observations ``(n_trials, n_obs,
     obs_dim)`` -> ``out (n_trials, n_obs, action_dim)``."""

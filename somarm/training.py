@@ -9,8 +9,10 @@ Building the task and learners, and writing the results, belong to ``somarm.run`
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,6 +20,8 @@ import numpy as np
 from somarm.progress import Progress
 from somarm.protocols import BatchedTask, Learner
 from somarm.stopping import stop_between_steps
+from somarm.tasks.base import step_together
+from somarm.tasks.pool import single_threaded
 
 __all__ = ["Curves", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards"]
 
@@ -55,6 +59,7 @@ def loop(
     on_step: StepHook | None = None,
     label: str = "",
     snapshots_at: tuple[int, ...] = (),
+    lanes: list[list[int]] | None = None,
 ) -> Curves:
     """Train ``learners`` (learner i owns trials ``parts[i]`` of its task) for ``n_steps`` steps.
 
@@ -73,6 +78,8 @@ def loop(
         (one task only).
       label: progress-bar label.
       snapshots_at: steps after which to copy each learner's maps.
+      lanes: the tasks (indices) each thread steps, with their learners, side by side in every step
+        (``lanes``); default one lane of every task, stepped in this thread.
 
     Returns:
       The ``Curves`` of every trial, the tasks' trials side by side in task order.
@@ -80,12 +87,13 @@ def loop(
     Raises:
       ValueError: ``on_step`` with several tasks.
     """
-    from somarm.tasks.base import step_together
-
     tasks = task if isinstance(task, list) else [task]
     owners = [0] * len(learners) if owners is None else owners
     if len(tasks) > 1 and on_step is not None:
         raise ValueError("on_step needs a group on one task and seed")
+    lanes = [list(range(len(tasks)))] if lanes is None else lanes
+    if sorted(i for lane in lanes for i in lane) != list(range(len(tasks))):
+        raise ValueError("lanes must share out the tasks, each task to one lane")
     n_trials = sum(t.n_trials for t in tasks)
     n_blocks = n_steps // block
     block_means = np.zeros((n_blocks, n_trials))
@@ -97,21 +105,41 @@ def loop(
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
     episodic = [bool(getattr(t, "episodic", False)) for t in tasks]  # multi-step episodes (reach2_obstacle)
+    # The lanes other than the first run in their own threads; each owns its tasks and learners,
+    # so every trial sees the same arithmetic in the same order as with one lane.
+    pool = ThreadPoolExecutor(len(lanes) - 1, thread_name_prefix="somarm-lane") if len(lanes) > 1 else None
+    members = [[j for j, i in enumerate(owners) if i in lane] for lane in lanes]
+    observations: list[np.ndarray] = [np.empty(0)] * len(tasks)
+    rewards_of: list[np.ndarray] = [np.empty(0)] * len(tasks)
+
+    def run_lane(k: int) -> None:
+        """One step of lane k: its tasks reset, its learners act, one physics call, its learners learn."""
+        with single_threaded() if pool else contextlib.nullcontext():  # the lanes already fill the cores
+            for i in lanes[k]:
+                observations[i] = tasks[i].reset()
+            for j in members[k]:
+                i, part = owners[j], parts[j]
+                actions[i][part] = learners[j].act(observations[i][part])
+            stepped = step_together([tasks[i] for i in lanes[k]], [actions[i] for i in lanes[k]])
+            for i, r in zip(lanes[k], stepped, strict=True):
+                rewards_of[i] = r
+            for j in members[k]:
+                i, part = owners[j], parts[j]
+                if episodic[i]:  # the next state and whether the episode ended there
+                    learners[j].learn(rewards_of[i][part], tasks[i].next_observations[part], tasks[i].terminal[part])
+                else:
+                    learners[j].learn(rewards_of[i][part])
+
     start = time.perf_counter()
     step = 0
     interrupted = False
-    with stop_between_steps() as stop:
+    with stop_between_steps() as stop, pool or contextlib.nullcontext():
         try:
             while step < n_steps:
-                observations = [t.reset() for t in tasks]
-                for learner, i, part in zip(learners, owners, parts, strict=True):
-                    actions[i][part] = learner.act(observations[i][part])
-                rewards_of = step_together(tasks, actions)
-                for learner, i, part in zip(learners, owners, parts, strict=True):
-                    if episodic[i]:  # the next state and whether the episode ended there
-                        learner.learn(rewards_of[i][part], tasks[i].next_observations[part], tasks[i].terminal[part])
-                    else:
-                        learner.learn(rewards_of[i][part])
+                others = [pool.submit(run_lane, k) for k in range(1, len(lanes))] if pool else []
+                run_lane(0)
+                for other in others:
+                    other.result()
                 rewards = rewards_of[0] if len(tasks) == 1 else np.concatenate(rewards_of)
                 accumulated += rewards
                 accumulated_sq += rewards * rewards

@@ -22,7 +22,7 @@ from typing import Any
 from somarm.tasks.record import TaskRecord, parse_values
 
 __all__ = ["names", "describe", "record", "records", "params_type", "parse_values", "load", "make",
-           "set_threads", "TaskRecord"]
+           "set_threads", "threads", "TaskRecord"]
 
 #: The modules holding task records (each defines ``RECORDS``); a new task module adds one line.
 _MODULES = ("reach", "four_goals", "throw", "obstacle")
@@ -110,6 +110,14 @@ def load(name: str, *, seed: int = 0, **params: Any):
     physics, task = record(name).environment(make(name, seed=seed, **params))
     # A driven arm integrates several timesteps per action (actuated reach, reach2_obstacle).
     return control.Environment(physics, task, n_sub_steps=getattr(task, "sub_steps", 1))
+
+
+def threads() -> int:
+    """Threads the MuJoCo backend may use for a batch from this thread (``set_threads``; 1 in a lane)."""
+    from somarm.tasks import flight
+    from somarm.tasks.pool import threads_here
+
+    return threads_here(flight.THREADS)
 
 
 def set_threads(n: int) -> None:

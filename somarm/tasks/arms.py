@@ -15,7 +15,7 @@ import numpy as np
 from dm_control import mujoco as dm_mujoco
 
 from somarm.tasks.assets import ARM20_LINK_LENGTH, model_path
-from somarm.tasks.pool import shared_pool
+from somarm.tasks.pool import shared_pool, threads_here
 
 __all__ = ["LINK_LENGTHS", "TIMESTEP", "ArmPhysics", "ArmBatch", "fingertips"]
 
@@ -143,7 +143,7 @@ def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int | None = None
         raise ValueError(f"angles must have shape (..., {n_links}), got {angles.shape}")
     flat = np.ascontiguousarray(angles.reshape(-1, n_links))
     out = np.empty((len(flat), 2))
-    workers = (THREADS if n_threads is None else n_threads) if len(flat) > 512 else 1
+    workers = (threads_here(THREADS) if n_threads is None else n_threads) if len(flat) > 512 else 1
     if workers <= 1:
         _batch(n_links).fingertips(flat, out)
     else:

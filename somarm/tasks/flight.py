@@ -49,7 +49,7 @@ from mujoco import rollout as mj_rollout
 
 from somarm.ballistics import flight_time
 from somarm.tasks.assets import model_path
-from somarm.tasks.pool import shared_pool
+from somarm.tasks.pool import shared_pool, threads_here
 
 __all__ = ["DEFAULT_TOLERANCE", "MAX_KH", "SCALED_STEP", "error_bound", "step_for", "fly",
            "max_steps_for", "ProjectileBatch", "landing_x"]
@@ -530,7 +530,7 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
     # The throws in flight order, so that every chunk is a slice (a view, no gathering).
     flat = tuple(a[order] for a in (ux_, uy_, k, W_, scale))
     landed = np.empty(total)
-    workers = max(1, THREADS if n_threads is None else n_threads)
+    workers = max(1, threads_here(THREADS) if n_threads is None else n_threads)
     shares, _ = _schedule(lengths[order], max(1, chunk), workers)
     if len(shares) == 1:
         _run_chunks(shares[0], flat, landed, G)

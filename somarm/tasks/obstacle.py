@@ -30,6 +30,7 @@ from dm_env import specs
 from somarm.streams import trial_generators, trial_ids_for
 from somarm.tasks import actuation, arms
 from somarm.tasks.base import check_actions
+from somarm.tasks.pool import threads_here
 from somarm.tasks.record import TaskRecord
 
 __all__ = ["ObstacleParams", "Obstacle", "ObstaclePhysics", "ObstacleEnvTask", "RECORDS", "REST_POSE", "GOAL",
@@ -131,7 +132,7 @@ class Obstacle:
 
     # -- physics -------------------------------------------------------------------------
     def _servos(self, n: int) -> actuation.Servos:
-        return actuation.servos("arm2_obstacle", arms.THREADS if n > 512 else 1)
+        return actuation.servos("arm2_obstacle", threads_here(arms.THREADS) if n > 512 else 1)
 
     def advance(self, qpos: np.ndarray, qvel: np.ndarray, actions: np.ndarray, *, path: bool = False):
         """One control interval from ``(qpos, qvel)`` ``(n, 2)`` with target changes ``actions`` ``(n, 2)``.

@@ -21,6 +21,7 @@ import numpy as np
 from somarm import kinematics
 from somarm.tasks import actuation, arms
 from somarm.tasks.base import OneStepEnvTask, OneStepTask
+from somarm.tasks.pool import threads_here
 from somarm.tasks.record import TaskRecord
 
 __all__ = ["DYNAMICS", "ReachParams", "Reach", "ReachEnvTask", "ArmEnvTask", "RECORDS", "ARM_ACTION_LABELS",
@@ -126,7 +127,7 @@ class Reach(OneStepTask):
         if not self.actuated:
             return actions[..., None, :] if path else actions
         flat = actions.reshape(-1, self.n_links)
-        threads = arms.THREADS if len(flat) > 512 else 1
+        threads = threads_here(arms.THREADS) if len(flat) > 512 else 1
         start = np.zeros_like(flat)
         result = actuation.servos(f"arm{self.n_links}", threads).run(start, start, flat, self.settle_steps,
                                                                      path=path)
