@@ -126,17 +126,20 @@ def within_reach(
     """Whether each target X lies in ``landing_range``: ``(lowest <= X) & (X <= highest)``, exactly.
 
     Equal to that expression element for element, for every input, at a fraction of its cost on
-    small arrays. A compiled loop computes the bounds with the same operations in the same order
-    as ``landing_range``; its only differences come from the libraries' exp, expm1 and log, which
-    are each within a few units in the last place (about 1e-15 relative) of the exact result.
-    So its bound differs from NumPy's by at most about 1e-14 times the size of the terms summed
-    into it (``|ux + W| (|T| + |length|) + |W T|``, length the decay length; an interior extremum
-    the two place differently is flat there, and an extremum one of them places just inside
-    [0, 1] lies within an ulp of an end's value). Where X is farther than 1e-9 times
-    (1 + that size) from a bound, a million times that difference, the compiled value decides the
-    comparison as NumPy would. The rest (X within the band, or anything not finite) is decided by
-    ``landing_range`` itself on those elements only; NumPy's ufuncs act element by element, so
-    its value there is the one it would give on the whole array.
+    small arrays (100 targets: about 30 us against 220 us; 10,000: 0.9 ms against 2.1 ms). Why:
+
+    - A compiled loop computes the bounds with the same IEEE operations in the same order as
+      ``landing_range``; only the libraries' expm1 and log may differ from NumPy's, each by a few
+      units in the last place (about 1e-15 relative; glibc's and NumPy's are that accurate).
+    - So a compiled bound differs from NumPy's by at most about 1e-14 times the size of the terms
+      it is summed from, ``|ux + W| (|T| + |length|) + |W T|`` (length the decay length, the
+      largest over the landings compared). An interior extremum that the two place a few ulps
+      apart is flat there; one that only one of them places inside [0, 1] lies within an ulp of
+      uy = 0 or 1, so its landing is that end's to within the same bound.
+    - Where X is farther than 1e-9 (1 + that size) from a bound, a hundred thousand times that
+      difference, the compiled comparison is NumPy's. The rest (X within that band of a bound,
+      a NaN, an infinite bound) is decided by ``landing_range`` itself on those elements only;
+      its ufuncs act element by element, so there it gives what it gives on the whole array.
 
     Args:
       X: targets. G: gravity. Fr, W, M: drag, wind and mass; all broadcast together.
@@ -162,9 +165,10 @@ def within_reach(
     return (status == 1).reshape(shape)
 
 
-# The compiled mirror of landing_x and _extreme_over_uy, one parameter set at a time: the same
-# operations in the same order as the NumPy functions above (keep them in step). error_model
-# "numpy" gives inf and NaN on division by zero, as NumPy does, instead of raising.
+# The compiled mirror of landing_x (with flight_time and _decay_length) and _extreme_over_uy,
+# one parameter set at a time: the same operations in the same order as those NumPy functions
+# (keep them in step; test_ballistics checks the answers agree on and near the bounds).
+# error_model "numpy" gives inf and NaN on division by zero, as NumPy does, instead of raising.
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _landing_and_size(ux, uy, G, k, W):
     """``landing_x`` at (ux, uy) for ``k = Fr / M``, and the size of the terms it sums."""
