@@ -156,13 +156,12 @@ def within_reach(
                    for v in values)
     n = math.prod(shape)
     status = np.empty(n, dtype=np.int8)
-    _reach_status(X, float(G), Fr, W, M, status)
-    unsure = np.flatnonzero(status < 0)
-    if unsure.size:
+    if _reach_status(X, float(G), Fr, W, M, status):
+        unsure = np.flatnonzero(status < 0)
         pick = [v[unsure] if v.size == n else v for v in (X, Fr, W, M)]
         lowest, highest = landing_range(G=G, Fr=pick[1], W=pick[2], M=pick[3])
         status[unsure] = (lowest <= pick[0]) & (pick[0] <= highest)
-    return (status == 1).reshape(shape)
+    return status.view(np.bool_).reshape(shape)  # every status is now 0 or 1
 
 
 # The compiled mirror of landing_x (with flight_time and _decay_length) and _extreme_over_uy,
@@ -211,10 +210,11 @@ def _side(gap, size):
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _reach_status(X, G, Fr, W, M, status):
-    """Per element: 1 surely in reach, 0 surely not, -1 too close to a bound to tell.
+    """Per element: 1 surely in reach, 0 surely not, -1 too close to a bound to tell; returns how many -1.
 
     ``X``, ``Fr``, ``W``, ``M`` are 1-D, of the size of ``status`` or of size 1 (one value for all).
     """
+    unsure = 0
     for i in range(status.shape[0]):
         x, w = X[min(i, X.size - 1)], W[min(i, W.size - 1)]
         k = Fr[min(i, Fr.size - 1)] / M[min(i, M.size - 1)]
@@ -226,6 +226,8 @@ def _reach_status(X, G, Fr, W, M, status):
         highest, high_size = _extreme(1.0, G, k, w, True)
         below = _side(highest - x, high_size)
         status[i] = 0 if below == 0 else min(above, below)
+        unsure += status[i] < 0
+    return unsure
 
 
 def solution_ux(
