@@ -85,3 +85,53 @@ def test_landing_range_equals_a_brute_force_search(W, Fr):
     assert lowest <= landing.min() + 1e-12 and highest >= landing.max() - 1e-12
     assert lowest == pytest.approx(landing.min(), abs=1e-4)
     assert highest == pytest.approx(landing.max(), abs=1e-4)
+
+
+def _counting_landing_range(monkeypatch) -> list[int]:
+    """Make ``landing_range`` count the elements it is asked about (within_reach's fallback)."""
+    sizes: list[int] = []
+    original = ballistics.landing_range
+
+    def counted(**params):
+        sizes.append(int(np.broadcast_shapes(*(np.shape(v) for v in params.values()))[0]))
+        return original(**params)
+
+    monkeypatch.setattr(ballistics, "landing_range", counted)
+    return sizes
+
+
+def test_within_reach_answers_as_landing_range_on_and_near_the_bounds(monkeypatch):
+    rng = np.random.default_rng(11)
+    n = 4000
+    # Beyond Table 6's box: wind from behind (W > 0) puts the extremum inside [0, 1]; no drag.
+    Fr = np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0.0, 0.3, n))
+    W, M = rng.uniform(-4.0, 3.0, n), rng.uniform(0.5, 2.5, n)
+    lowest, highest = ballistics.landing_range(Fr=Fr, W=W, M=M)
+    bound = np.where(rng.random(n) < 0.5, lowest, highest)
+    ulps = rng.integers(-3, 4, n) * np.spacing(bound)
+    # The undecided band is 1e-9 (1 + size of the terms) wide, size < 600 here: X within 1e-10
+    # of a bound falls in it, X 1e-5 away does not.
+    offsets = [1e-12, -1e-12, 1e-10, -1e-10, 1e-5, -1e-5, 1e-3, -1e-3]
+    X = np.concatenate([bound, bound + ulps, *(bound + o for o in offsets), rng.uniform(-20.0, 20.0, n),
+                        [np.nan, np.inf, -np.inf]])
+    params = {key: np.concatenate([np.tile(v, len(offsets) + 3), v[:3]]) for key, v in
+              (("Fr", Fr), ("W", W), ("M", M))}
+    lowest, highest = ballistics.landing_range(**params)
+    expected = (lowest <= X) & (X <= highest)
+    sizes = _counting_landing_range(monkeypatch)
+    np.testing.assert_array_equal(ballistics.within_reach(X, **params), expected)
+    # Points on a bound and within 1e-10 of it (and NaN) were left to landing_range, the rest not.
+    assert len(sizes) == 1 and 6 * n < sizes[0] <= 6 * n + 10
+    assert 0.2 < expected.mean() < 0.8
+
+
+def test_within_reach_broadcasts_and_uses_no_fallback_away_from_the_bounds(monkeypatch):
+    X = np.linspace(-2.0, 12.0, 15)[:, None] + 0.01  # none on a bound (0 is the lowest of some)
+    W = np.array([-3.0, -1.0, 0.0, 0.7])
+    lowest, highest = ballistics.landing_range(Fr=0.15, W=W, M=1.4)
+    sizes = _counting_landing_range(monkeypatch)
+    reach = ballistics.within_reach(X, Fr=0.15, W=W, M=1.4)
+    assert reach.shape == (15, 4) and sizes == []
+    np.testing.assert_array_equal(reach, (lowest <= X) & (X <= highest))
+    assert ballistics.within_reach(4.0).shape == () and ballistics.within_reach(4.0)
+    assert not ballistics.within_reach(30.0, W=0.0, Fr=0.2)

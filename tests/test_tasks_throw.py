@@ -236,3 +236,42 @@ def test_reach_with_only_the_target_varied_is_the_closed_form_range():
     for _ in range(2):  # the range is computed once and then reused
         np.testing.assert_array_equal(task.reachable(observations), expected)
     assert 0 < expected.sum() < len(expected)
+
+
+def _first_reachable_by_hand(task, uniforms: np.ndarray) -> np.ndarray:
+    """The sampler spelled out: each row's 16 candidates in turn, judged by landing_range one at a time."""
+    d = len(task.varied)
+    candidates = task.observation_low + (task.observation_high - task.observation_low) * uniforms.reshape(-1, 16, d)
+    chosen = []
+    for row in candidates:
+        for candidate in row:
+            c = task.conditions(candidate)
+            lowest, highest = ballistics.landing_range(G=task.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+            if lowest <= c["X"] <= highest:
+                chosen.append(candidate)
+                break
+        else:  # all 16 missed: the first, with X pulled back to the farthest landing
+            c = task.conditions(row[0])
+            _, highest = ballistics.landing_range(G=task.params.G, Fr=c["Fr"], W=c["W"], M=c["M"])
+            chosen.append(np.concatenate([[min(row[0][0], highest)], row[0][1:]]))
+    return np.array(chosen)
+
+
+@pytest.mark.parametrize("name", ["throw_wind", "throw_friction", "throw_mass"])
+def test_observations_are_the_first_reachable_candidate_of_each_row(name):
+    task = tasks.make(name, n_trials=3, seed=0)
+    uniforms = np.random.default_rng(12).random((400, task.uniform_width))
+    d = len(task.varied)
+    uniforms[41, :2] = [0.0, 1.0]  # X = 0, no wind: on the lowest bound (the shortest throw)
+    if name != "throw_wind":  # throw_wind's box is all in reach (Fr = 0.1 reaches 9.8 in still air)
+        # X = 9, no wind, full drag, least mass: out of reach. First candidates of 40 rows, all of one.
+        far = np.array([1.0, 1.0, 1.0, 0.0])[:d]
+        uniforms[:40, :5 * d] = np.tile(far, 5)
+        uniforms[40] = np.tile(far, 16)
+    fast = task.observations_from(uniforms)
+    np.testing.assert_array_equal(fast, _first_reachable_by_hand(task, uniforms))
+    firsts = task.observation_low + (task.observation_high - task.observation_low) * uniforms[:, :d]
+    first_kept = (firsts == fast).all(axis=1)
+    assert first_kept[41:].mean() > 0.95 and first_kept[41]
+    if name != "throw_wind":
+        assert not first_kept[:41].any() and 0.0 < fast[40, 0] < 9.0  # all 16 missed: X pulled back
