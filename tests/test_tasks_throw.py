@@ -201,7 +201,12 @@ def test_a_schedule_covers_the_batch_once_over_its_threads():
         assert covered[0][0] == 0 and covered[-1][1] == n
         assert all(b == a2 for (_, b), (a2, _) in zip(covered, covered[1:], strict=False))
         steps = np.ceil(lengths - 1e-9) + 1.0
-        assert longest == pytest.approx(max(sum(flight._chunk_cost(steps, a, b) for a, b in s) for s in shares))
+        handing_over = flight._THREAD_COST if len(shares) > 1 else 0.0
+        assert longest == pytest.approx(max(sum(flight._chunk_cost(steps, a, b) for a, b in s) for s in shares)
+                                        + handing_over)
+    # A batch of a few short flights stays in one thread; a large one is shared.
+    assert len(flight._schedule(np.sort(rng.uniform(0.0, 20.0, 10)), 256, 2)[0]) == 1
+    assert len(flight._schedule(np.sort(rng.uniform(0.0, 45.0, 1000)), 256, 2)[0]) == 2
 
 
 def test_each_flight_takes_the_fewest_whole_steps_within_the_tolerance():
