@@ -78,8 +78,9 @@ def loop(
         (one task only).
       label: progress-bar label.
       snapshots_at: steps after which to copy each learner's maps.
-      lanes: the tasks (indices) each thread steps, with their learners, side by side in every step
-        (``lanes``); default one lane of every task, stepped in this thread.
+      lanes: the tasks (indices) each thread steps, with their learners, side by side (default one
+        lane of every task, in this thread); with several, each step runs either in the lanes or in
+        this thread alone, whichever measures faster (``_LanePolicy``).
 
     Returns:
       The ``Curves`` of every trial, the tasks' trials side by side in task order.
@@ -106,24 +107,28 @@ def loop(
     last_mean = float("nan")
     episodic = [bool(getattr(t, "episodic", False)) for t in tasks]  # multi-step episodes (reach2_obstacle)
     # The lanes other than the first run in their own threads; each owns its tasks and learners,
-    # so every trial sees the same arithmetic in the same order as with one lane.
+    # so every trial sees the same arithmetic in the same order as with one lane. Whether a step
+    # is faster in lanes or in this thread alone (all tasks, one physics call on the batch's own
+    # threads) depends on the machine and on how the learners' cost changes: ``_LanePolicy`` measures.
     pool = ThreadPoolExecutor(len(lanes) - 1, thread_name_prefix="somarm-lane") if len(lanes) > 1 else None
+    policy = _LanePolicy(enabled=pool is not None)
     members = [[j for j, i in enumerate(owners) if i in lane] for lane in lanes]
+    every_task, every_learner = list(range(len(tasks))), list(range(len(learners)))
     observations: list[np.ndarray] = [np.empty(0)] * len(tasks)
     rewards_of: list[np.ndarray] = [np.empty(0)] * len(tasks)
 
-    def run_lane(k: int) -> None:
-        """One step of lane k: its tasks reset, its learners act, one physics call, its learners learn."""
-        with single_threaded() if pool else contextlib.nullcontext():  # the lanes already fill the cores
-            for i in lanes[k]:
+    def run_lane(task_ids: list[int], learner_ids: list[int], in_lane: bool) -> None:
+        """One step of these tasks and learners: reset, act, one physics call, learn."""
+        with single_threaded() if in_lane else contextlib.nullcontext():  # the lanes already fill the cores
+            for i in task_ids:
                 observations[i] = tasks[i].reset()
-            for j in members[k]:
+            for j in learner_ids:
                 i, part = owners[j], parts[j]
                 actions[i][part] = learners[j].act(observations[i][part])
-            stepped = step_together([tasks[i] for i in lanes[k]], [actions[i] for i in lanes[k]])
-            for i, r in zip(lanes[k], stepped, strict=True):
+            stepped = step_together([tasks[i] for i in task_ids], [actions[i] for i in task_ids])
+            for i, r in zip(task_ids, stepped, strict=True):
                 rewards_of[i] = r
-            for j in members[k]:
+            for j in learner_ids:
                 i, part = owners[j], parts[j]
                 if episodic[i]:  # the next state and whether the episode ended there
                     learners[j].learn(rewards_of[i][part], tasks[i].next_observations[part], tasks[i].terminal[part])
@@ -136,10 +141,16 @@ def loop(
     with stop_between_steps() as stop, pool or contextlib.nullcontext():
         try:
             while step < n_steps:
-                others = [pool.submit(run_lane, k) for k in range(1, len(lanes))] if pool else []
-                run_lane(0)
-                for other in others:
-                    other.result()
+                threaded = policy.threaded(step)
+                began = time.perf_counter()
+                if threaded:
+                    others = [pool.submit(run_lane, lanes[k], members[k], True) for k in range(1, len(lanes))]
+                    run_lane(lanes[0], members[0], True)
+                    for other in others:
+                        other.result()
+                else:
+                    run_lane(every_task, every_learner, False)
+                policy.record(threaded, time.perf_counter() - began)
                 rewards = rewards_of[0] if len(tasks) == 1 else np.concatenate(rewards_of)
                 accumulated += rewards
                 accumulated_sq += rewards * rewards
@@ -166,6 +177,44 @@ def loop(
     bar.close(step, last_mean)
     done = step // block
     return Curves(block_means[:done], block_sq_means[:done], step, wall_time, interrupted, snapshots)
+
+
+class _LanePolicy:
+    """Whether a step runs its lanes in threads, by measurement.
+
+    Every ``PERIOD`` steps, ``PROBE`` steps run in this thread alone, then ``PROBE`` in lanes; the
+    rest of the period runs the way whose median step was shorter. Measured on 2 cores: Fig. 25's
+    four 100-trial learners run about 1.15x faster in two lanes, while Fig. 24's groups of 20-trial
+    learners, whose steps are mostly Python around the physics, run slower in lanes (the threads
+    share the GIL, and each lane pays the longest flight's model steps).
+    """
+
+    PROBE = 16
+    PERIOD = 1000
+
+    def __init__(self, *, enabled: bool) -> None:
+        self.enabled = enabled
+        self.best = False
+        self.probing = False
+        self.times: dict[bool, list[float]] = {False: [], True: []}
+
+    def threaded(self, step: int) -> bool:
+        """Whether step ``step`` (0-based) runs in lanes."""
+        if not self.enabled:
+            return False
+        phase = step % self.PERIOD
+        self.probing = phase < 2 * self.PROBE
+        if self.probing:
+            return phase >= self.PROBE
+        if self.times[False] and self.times[True]:  # the first step after a probe decides
+            self.best = float(np.median(self.times[True])) < float(np.median(self.times[False]))
+            self.times = {False: [], True: []}
+        return self.best
+
+    def record(self, threaded: bool, seconds: float) -> None:
+        """The wall time of the step just asked about (kept while probing)."""
+        if self.enabled and self.probing:
+            self.times[threaded].append(seconds)
 
 
 def final_blocks(n_blocks: int, block: int, window: int) -> int:

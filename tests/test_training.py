@@ -85,6 +85,25 @@ def test_lanes_share_the_trials_evenly_most_first():
     assert run.share_lanes([5, 5, 5], 1) == [0, 0, 0]
 
 
+def test_the_lane_policy_keeps_the_way_that_measured_faster():
+    from somarm.training import _LanePolicy
+
+    for lanes_faster in (True, False):
+        policy = _LanePolicy(enabled=True)
+        ways = []
+        for step in range(2 * _LanePolicy.PERIOD):
+            threaded = policy.threaded(step)
+            ways.append(threaded)
+            policy.record(threaded, 1.0 if threaded == lanes_faster else 2.0)
+        probe = _LanePolicy.PROBE
+        for start in (0, _LanePolicy.PERIOD):  # each period probes one thread, then lanes, then keeps the faster
+            assert ways[start:start + probe] == [False] * probe
+            assert ways[start + probe:start + 2 * probe] == [True] * probe
+            assert set(ways[start + 2 * probe:start + _LanePolicy.PERIOD]) == {lanes_faster}
+    disabled = _LanePolicy(enabled=False)
+    assert not any(disabled.threaded(step) for step in range(100))
+
+
 def test_a_loop_refuses_lanes_that_do_not_share_out_its_tasks():
     from somarm import training
 
