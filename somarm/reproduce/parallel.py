@@ -1,12 +1,14 @@
-"""``somarm reproduce --jobs N``: experiments run at once, each in its own worker process.
+"""``somarm reproduce --jobs N``: experiments run at once, in N worker processes.
 
 The experiments of a reproduction share nothing but the output folder (each writes its own
-figures), so N of them can run at once on N cores. Each runs in a fresh process (``spawn``), the
-longest first, with its physics on as many threads as there are cores (while two run the system
-shares the cores; the last one left gets them all: measured on 2 cores, the paper's experiments
-took 288 s so against 312 s with one thread per worker); it sends back its finished section, and
-this process alone writes the report, in the paper's order, after each one. A worker's results
-equal a run in this process: every experiment draws from its own seeds.
+figures), so N of them can run at once on N cores. N worker processes are started fresh
+(``spawn``), once: each takes the next experiment, the longest first, whenever it is free (a
+process per experiment would pay a few seconds of imports every time). A worker runs its physics
+on as many threads as there are cores (while two run the system shares the cores; the last one
+left gets them all: measured on 2 cores, the paper's experiments took 288 s so against 312 s with
+one thread per worker). It sends back each finished section, and this process alone writes the
+report, in the paper's order, after each one. A worker's results equal a run in this process:
+every experiment draws from its own seeds.
 
 Workers start with Ctrl-C ignored, so a Ctrl-C at the terminal (or SIGTERM, which the command
 turns into Ctrl-C) reaches this process alone, which then sends every worker SIGTERM: that stops a
@@ -40,25 +42,32 @@ LONGEST_FIRST = ("more_inputs", "delayed_reward", "beyond", "neighbourhood_q", "
 _GRACE_S = 60.0
 
 
-def _worker(connection, experiment: Callable[[Context], Section], out: Path, quick: bool, seeds: tuple[int, ...],
-            backend: str, threads: int) -> None:
-    """Run one experiment and send ``("ok", section)`` or ``(kind, message)`` back."""
+def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend: str, threads: int) -> None:
+    """Run the experiments the parent sends, one at a time, until it sends None or hangs up; answer
+    each with ``("ok", section)`` or ``(kind, message)`` (after which this worker ends)."""
     from somarm import tasks
     from somarm.stopping import sigterm_as_interrupt
 
     sigterm_as_interrupt()
     tasks.set_threads(threads)
-    began = time.perf_counter()
     try:
-        section = run_experiment(experiment, out, quick=quick, seeds=seeds, progress=False, backend=backend)
-        section.wall_time_s = time.perf_counter() - began
-        connection.send(("ok", section))
-    except KeyboardInterrupt:
-        connection.send(("interrupted", ""))
-    except ValueError as exc:  # a one-line user-facing error (a full disk, say)
-        connection.send(("error", str(exc)))
-    except BaseException:  # a bug: its traceback goes to the parent, which shows it
-        connection.send(("crash", traceback.format_exc()))
+        while (experiment := connection.recv()) is not None:
+            began = time.perf_counter()
+            try:
+                section = run_experiment(experiment, out, quick=quick, seeds=seeds, progress=False, backend=backend)
+            except KeyboardInterrupt:
+                connection.send(("interrupted", ""))
+                return
+            except ValueError as exc:  # a one-line user-facing error (a full disk, say)
+                connection.send(("error", str(exc)))
+                return
+            except BaseException:  # a bug: its traceback goes to the parent, which shows it
+                connection.send(("crash", traceback.format_exc()))
+                return
+            section.wall_time_s = time.perf_counter() - began
+            connection.send(("ok", section))
+    except (EOFError, KeyboardInterrupt):  # the parent hung up, or stopped this worker while it waited
+        return
     finally:
         connection.close()
 
@@ -78,23 +87,28 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
     context = multiprocessing.get_context("spawn")
     threads = max(1, os.cpu_count() or 1)  # see the module docstring
     waiting = sorted(experiments, key=lambda n: LONGEST_FIRST.index(n) if n in LONGEST_FIRST else len(LONGEST_FIRST))
+    workers: list = []  # (connection, process), started once and given one experiment after another
+    for i in range(min(jobs, len(waiting))):
+        mine, theirs = context.Pipe()
+        process = context.Process(target=_worker, args=(theirs, out, quick, seeds, backend, threads),
+                                  name=f"somarm-worker-{i}", daemon=True)
+        # Started while Ctrl-C is ignored, the worker inherits that (from its first instruction on).
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            process.start()
+        finally:
+            signal.signal(signal.SIGINT, previous)
+        theirs.close()
+        workers.append((mine, process))
+    idle = list(workers)
     running: dict = {}  # connection -> (name, process)
     try:
         while waiting or running:
-            while waiting and len(running) < jobs:
+            while waiting and idle:
                 name = waiting.pop(0)
-                receive, send = context.Pipe(duplex=False)
-                process = context.Process(target=_worker,
-                                          args=(send, experiments[name], out, quick, seeds, backend, threads),
-                                          name=f"somarm-{name}", daemon=True)
-                # Started while Ctrl-C is ignored, the worker inherits that (from its first instruction on).
-                previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-                try:
-                    process.start()
-                finally:
-                    signal.signal(signal.SIGINT, previous)
-                send.close()
-                running[receive] = (name, process)
+                connection, process = idle.pop(0)
+                connection.send(experiments[name])
+                running[connection] = (name, process)
                 print(f"{name}: started in process {process.pid}", file=sys.stderr, flush=True)
             for connection in wait(list(running)):
                 name, process = running.pop(connection)
@@ -103,8 +117,8 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                 except EOFError:
                     process.join()
                     kind, payload = "crash", f"its process ended without an answer (exit code {process.exitcode})"
-                process.join()
                 if kind == "ok":
+                    idle.append((connection, process))
                     finished(name, payload)
                 elif kind == "interrupted":
                     raise KeyboardInterrupt
@@ -112,24 +126,27 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                     raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
                 else:
                     raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
+        for connection, _ in workers:  # no more work: each worker ends after its last experiment
+            connection.send(None)
     except KeyboardInterrupt:
         print("\ninterrupted; the report holds the experiments that finished", file=sys.stderr)
         return 130
     finally:
-        _stop(running)
+        _stop(workers)
     return 0
 
 
-def _stop(running: dict) -> None:
+def _stop(workers: list) -> None:
     """SIGTERM to every worker still running, then wait for it (kill it after ``_GRACE_S``)."""
-    for _, process in running.values():
+    deadline = time.monotonic() + _GRACE_S
+    for _, process in workers:
+        process.join(0.5)  # a worker told to end is gone by now
         if process.is_alive():
             os.kill(process.pid, signal.SIGTERM)
-    deadline = time.monotonic() + _GRACE_S
-    for connection, (_, process) in running.items():
+    for connection, process in workers:
         process.join(max(0.0, deadline - time.monotonic()))
         if process.is_alive():
             process.kill()
             process.join()
         connection.close()
-    running.clear()
+    workers.clear()
