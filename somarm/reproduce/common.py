@@ -9,11 +9,13 @@ from pathlib import Path
 
 import numpy as np
 
-from somarm import plots
+from somarm import plots, tasks
 from somarm.reproduce.report import Section, merge_seeds
 from somarm.run import RunConfig, RunResult, final_rewards, train_group
+from somarm.split import train_split
 
 __all__ = [
+    "SPLIT_TRIAL_STEPS",
     "Context",
     "MOTORIC_CHOICE",
     "preset_choices",
@@ -24,6 +26,12 @@ __all__ = [
     "final_error",
     "fmt",
 ]
+
+
+#: A group of at least this many trial-steps trains in as many processes as there are threads
+#: (``somarm.split``): the paper-scale groups of Figs. 13, 24 and 25 and of the beyond part (a
+#: process's start-up, about 3 s, is not worth it for a quick run's groups).
+SPLIT_TRIAL_STEPS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -81,7 +89,12 @@ def run_group(
     if (label, ctx.seed) not in ctx.trained:
         seeds = ctx.seeds or (ctx.seed,)
         group = [dataclasses.replace(c, seed=s, backend=_backend(c.task, ctx.backend)) for s in seeds for c in configs]
-        results = train_group(group, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
+        processes = tasks.threads() if sum(c.n_trials * c.n_steps for c in group) >= SPLIT_TRIAL_STEPS else 1
+        if processes > 1:  # a long group: its configs shared out between processes (no shared GIL)
+            results = train_split(group, processes=processes, progress=ctx.progress, label=label,
+                                  snapshots_at=snapshots_at)
+        else:
+            results = train_group(group, progress=ctx.progress, label=label, snapshots_at=snapshots_at)
         if any(result.interrupted for result in results):
             raise KeyboardInterrupt
         for i, s in enumerate(seeds):
@@ -91,8 +104,6 @@ def run_group(
 
 def _backend(task: str, backend: str) -> str:
     """``backend`` where the task has it; MuJoCo for a task without closed forms (reach2_obstacle)."""
-    from somarm import tasks
-
     if backend == "mujoco":
         return backend
     try:
