@@ -90,8 +90,10 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
     workers: list = []  # (connection, process), started once and given one experiment after another
     for i in range(min(jobs, len(waiting))):
         mine, theirs = context.Pipe()
+        # Not a daemon, for it may share out a long group between processes of its own (somarm.split);
+        # every way out of this function stops and joins it (``_stop``).
         process = context.Process(target=_worker, args=(theirs, out, quick, seeds, backend, threads),
-                                  name=f"somarm-worker-{i}", daemon=True)
+                                  name=f"somarm-worker-{i}")
         # Started while Ctrl-C is ignored, the worker inherits that (from its first instruction on).
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
