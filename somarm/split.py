@@ -20,6 +20,7 @@ import signal
 import traceback
 
 from somarm.run import RunConfig, RunResult, share_lanes, train_group
+from somarm.stopping import start_deaf_to_ctrl_c
 from somarm.tasks.pool import single_threaded
 
 __all__ = ["train_split"]
@@ -61,11 +62,7 @@ def train_split(configs: list[RunConfig], *, processes: int, progress: bool = Tr
         mine, theirs = context.Pipe(duplex=False)
         process = context.Process(target=_worker, args=(theirs, [configs[j] for j in share], snapshots_at),
                                   name="somarm-share", daemon=True)
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited: Ctrl-C reaches this process alone
-        try:
-            process.start()
-        finally:
-            signal.signal(signal.SIGINT, previous)
+        start_deaf_to_ctrl_c(process)
         theirs.close()
         workers.append((mine, process))
     results: list[RunResult | None] = [None] * len(configs)

@@ -13,7 +13,7 @@ import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred"]
+__all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred", "start_deaf_to_ctrl_c"]
 
 
 @contextlib.contextmanager
@@ -65,6 +65,16 @@ def sigterm_as_interrupt() -> None:
 
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, handler)
+
+
+def start_deaf_to_ctrl_c(process) -> None:
+    """Start a worker ``multiprocessing.Process`` with Ctrl-C ignored from its first instruction on
+    (it inherits that): a Ctrl-C at the terminal reaches the parent alone, which stops its workers."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        process.start()
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager

@@ -31,6 +31,7 @@ from pathlib import Path
 
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section
+from somarm.stopping import start_deaf_to_ctrl_c
 
 __all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "run"]
 
@@ -98,12 +99,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
         # every way out of this function stops and joins it (``_stop``).
         process = context.Process(target=_worker, args=(theirs, out, quick, seeds, backend, threads),
                                   name=f"somarm-worker-{i}")
-        # Started while Ctrl-C is ignored, the worker inherits that (from its first instruction on).
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        try:
-            process.start()
-        finally:
-            signal.signal(signal.SIGINT, previous)
+        start_deaf_to_ctrl_c(process)
         theirs.close()
         workers.append((mine, process))
     idle = list(workers)
