@@ -72,8 +72,8 @@ _CALL_COST = 40.0
 _THREAD_COST = 600.0
 #: Projectiles per model: a chunk runs in the smallest of these that holds it (few models built).
 _SIZES = (*range(1, 17), *range(20, 65, 4), *range(80, 257, 16))
-#: ``_SIZE_OF[m]``: the model size for a chunk of ``m`` (index 0 unused).
-_SIZE_OF = np.array([0] + [min(s for s in _SIZES if s >= m) for m in range(1, _SIZES[-1] + 1)])
+#: ``_SIZE_OF[m]``: the model size for a chunk of ``m`` (index 0 unused), as floats for ``_cut``.
+_SIZE_OF = np.array([0.0] + [min(s for s in _SIZES if s >= m) for m in range(1, _SIZES[-1] + 1)])
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
 #: Threads for batches of more than one chunk (2 by default: a small machine); see ``tasks.set_threads``.
@@ -165,12 +165,17 @@ def _locate(z0, w0, x0, v0, x1, v1, *, gravity: float, dt: float) -> tuple[np.nd
     return _hermite(s, x0, v0, x1, v1, dt), s * dt
 
 
-def _locate_one(z0: float, w0: float, x0: float, v0: float, x1: float, v1: float, *, gravity: float,
-                dt: float) -> float:
-    """``_locate`` of one projectile in plain floats (the dm_env path), the same arithmetic."""
+#: ``_hermite`` compiled for floats (the same source, so the same arithmetic).
+_hermite_one = numba.njit(cache=True, nogil=True)(_hermite)
+
+
+@numba.njit(cache=True, nogil=True)
+def _locate_one(z0, w0, x0, v0, x1, v1, gravity, dt):
+    """``_locate``'s landing x of one projectile in floats, compiled (the dm_env path and the
+    batches' ``_land_rows``): the same arithmetic in the same order (no fastmath)."""
     disc = math.sqrt(max(w0 * w0 + 2.0 * gravity * z0, 0.0))
     tau = (w0 + disc) / gravity if w0 >= 0.0 else 2.0 * z0 / (disc - w0)
-    return _hermite(min(max(tau / dt, 0.0), 1.0), x0, v0, x1, v1, dt)
+    return _hermite_one(min(max(tau / dt, 0.0), 1.0), x0, v0, x1, v1, dt)
 
 
 def _landings(positions: np.ndarray, velocities: np.ndarray, x, z, *, gravity: float, dt: float):
@@ -284,7 +289,7 @@ def _fly_one(model: mujoco.MjModel, data: mujoco.MjData, x: int, z: int, *, max_
         mujoco.mj_step(model, data)
         steps += 1
         before, after = after, (float(qpos[x]), float(qpos[z]), float(qvel[x]), float(qvel[z]))
-    return _locate_one(before[1], before[3], before[0], before[2], after[0], after[2], gravity=gravity, dt=dt)
+    return _locate_one(before[1], before[3], before[0], before[2], after[0], after[2], gravity, dt)
 
 
 def max_steps_for(uy_max: float, *, G: float, dt: float) -> int:
@@ -333,15 +338,9 @@ class ProjectileBatch:
         self._force = np.zeros(self.model.nv)
         self._wind = self._force[self._x]
 
-    def land(self, ux, uy, k, W, scale) -> np.ndarray:
-        """Landing x for up to ``n`` throws (1-D arrays of length ``m <= n``; ``k`` = Fr / M, ``scale`` each
-        throw's RK4 step), simulated in one native rollout."""
-        out = np.empty(len(ux))
-        self.land_into(out, ux, uy, k, W, scale)
-        return out
-
-    def land_into(self, out, ux, uy, k, W, scale) -> None:
-        """``land`` written into ``out`` (length ``m``): the batch's hot path, few NumPy calls."""
+    def land(self, out, ux, uy, k, W, scale) -> None:
+        """Landing x of up to ``n`` throws into ``out`` (1-D arrays of length ``m <= n``; ``k`` = Fr / M,
+        ``scale`` each throw's RK4 step), simulated in one native rollout; buffers reused."""
         m = len(ux)
         model = self.model
         rate = scale * k
@@ -368,7 +367,7 @@ class ProjectileBatch:
 @numba.njit(cache=True, nogil=True)
 def _land_rows(states, m, qpos, qvel, gravity, dt, scale, out):
     """``_landings`` of a rollout's rows for projectiles ``0..m-1`` (dofs 2i and 2i+1), times
-    ``scale``, into ``out``: the same arithmetic in the same order (no fastmath), compiled.
+    ``scale``, into ``out``: the first row at or below the ground, then ``_locate_one``.
 
     Returns False if a projectile is still above the ground in the last row.
     """
@@ -381,19 +380,9 @@ def _land_rows(states, m, qpos, qvel, gravity, dt, scale, out):
         if after == rows:
             return False
         before = after - 1
-        z0, w0 = states[before, qpos + z], states[before, qvel + z]
-        x0, v0 = states[before, qpos + x], states[before, qvel + x]
-        x1, v1 = states[after, qpos + x], states[after, qvel + x]
-        disc = math.sqrt(max(w0 * w0 + 2.0 * gravity * z0, 0.0))
-        if w0 >= 0.0:
-            tau = (w0 + disc) / gravity
-        else:
-            tau = 2.0 * z0 / (disc - w0)
-        s = min(max(tau / dt, 0.0), 1.0)
-        s2 = s * s
-        s3 = s2 * s
-        out[i] = ((2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * dt * v0
-                  + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * dt * v1) * scale[i]
+        out[i] = _locate_one(states[before, qpos + z], states[before, qvel + z], states[before, qpos + x],
+                             states[before, qvel + x], states[after, qpos + x], states[after, qvel + x],
+                             gravity, dt) * scale[i]
     return True
 
 
@@ -456,9 +445,17 @@ def _partition(lengths: np.ndarray, size: int) -> list[tuple[int, int]]:
     and one per projectile of its model (``_SIZES``, so a few models serve every chunk). Small
     batches come out as a few chunks of similar flights, large ones as full chunks.
     """
-    steps = np.ceil(np.asarray(lengths, dtype=np.float64) - 1e-9) + 1.0
-    cap = max(1, min(int(size), len(_SIZE_OF) - 1))
-    start = _cut(steps, _SIZE_OF.astype(np.float64), cap, _STEP_COST, _CALL_COST)
+    return _cut_steps(_model_steps(np.asarray(lengths, dtype=np.float64)), size)
+
+
+def _model_steps(lengths: np.ndarray) -> np.ndarray:
+    """The model steps ``ProjectileBatch.land`` takes for flights of these lengths (``max_steps_for``)."""
+    return np.ceil(lengths - 1e-9) + 1.0
+
+
+def _cut_steps(steps: np.ndarray, size: int) -> list[tuple[int, int]]:
+    """``_partition`` of flights given by their model steps."""
+    start = _cut(steps, _SIZE_OF, max(1, min(int(size), len(_SIZE_OF) - 1)), _STEP_COST, _CALL_COST)
     bounds = []
     stop = len(steps)
     while stop > 0:
@@ -479,14 +476,14 @@ def _schedule(lengths: np.ndarray, chunk: int, workers: int) -> tuple[list[list[
     threads is tried too; handing work to another thread costs ``_THREAD_COST`` (measured: a small
     batch is done sooner in one thread), and the schedule that ends first is kept.
     """
-    steps = np.ceil(lengths - 1e-9) + 1.0
+    steps = _model_steps(lengths)
     n = len(lengths)
-    alone = _partition(lengths, chunk)
+    alone = _cut_steps(steps, chunk)
     best = ([alone], sum(_chunk_cost(steps, a, b) for a, b in alone))
     if workers == 1:
         return best
     for cap in sorted({chunk, min(chunk, max(1, -(-n // workers)))}, reverse=True):
-        bounds = alone if cap == chunk else _partition(lengths, cap)
+        bounds = alone if cap == chunk else _cut_steps(steps, cap)
         if len(bounds) < 2:
             continue
         cost = [_chunk_cost(steps, a, b) for a, b in bounds]
@@ -506,7 +503,7 @@ def _run_chunks(bounds: list[tuple[int, int]], arrays, out: np.ndarray, G: float
     ux, uy, k, W, scale = arrays
     for a, b in bounds:
         batch = _batch_for_thread(_model_size(b - a), G)
-        batch.land_into(out[a:b], ux[a:b], uy[a:b], k[a:b], W[a:b], scale[a:b])
+        batch.land(out[a:b], ux[a:b], uy[a:b], k[a:b], W[a:b], scale[a:b])
 
 
 def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float = DEFAULT_TOLERANCE,
