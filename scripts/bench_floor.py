@@ -38,6 +38,7 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from somarm import somq, tasks  # noqa: E402
+from somarm.benchmarks import best_seconds  # noqa: E402
 from somarm.reproduce import common, runner  # noqa: E402
 from somarm.tasks import arms, flight  # noqa: E402
 from somarm.tasks.assets import model_path  # noqa: E402
@@ -45,16 +46,6 @@ from somarm.tasks.assets import model_path  # noqa: E402
 THROWS = ("throw", "throw_distance", "throw_wind", "throw_friction", "throw_mass")
 #: The paper's experiments (what the 120 s target covers), in the paper's order.
 PAPER = ("reach2", "reach20", "four_goals", "throw", "throw_maps", "neighbourhood_q", "more_inputs")
-
-
-def _best(fn, repeats: int) -> float:
-    """Best wall-clock seconds of ``repeats`` calls."""
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def _throws(name: str, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -91,10 +82,9 @@ def dm_env_floor(episodes: int, repeats: int) -> None:
             for n in steps:
                 mujoco.mj_step(model, data, nstep=int(n))
 
-        whole()  # warm: numba's and dm_control's first calls
-        whole_us = _best(whole, repeats) / episodes * 1e6
-        floor_us = _best(physics_only, repeats) / episodes * 1e6
-        bare_us = _best(lambda: physics_only(bare.model, bare.data), repeats) / episodes * 1e6
+        whole_us = best_seconds(whole, repeats) / episodes * 1e6
+        floor_us = best_seconds(physics_only, repeats) / episodes * 1e6
+        bare_us = best_seconds(lambda: physics_only(bare.model, bare.data), repeats) / episodes * 1e6
         print(f"  {name:15s} RK4 steps a throw {steps.mean():5.1f}   episode {whole_us:5.0f} us   its MuJoCo "
               f"steps alone {floor_us:4.0f} us, in the leanest model {bare_us:4.0f} us   "
               f"{'below' if min(floor_us, bare_us) <= 100 else 'ABOVE'} the target")
@@ -109,8 +99,7 @@ def step_floor(large: int, steps: int, repeats: int) -> None:
         def batch(t=t):
             flight.landing_x(t["ux"], t["uy"], G=0.05, Fr=t["Fr"], W=t["W"], M=t["M"])
 
-        batch()  # builds this thread's models outside the timing
-        big = _best(batch, repeats) / large
+        big = best_seconds(batch, repeats) / large
         line = f"  {name:15s} large batch {big * 1e6:5.1f} us/throw"
         for n in (100, 20):
             work = []
@@ -125,8 +114,7 @@ def step_floor(large: int, steps: int, repeats: int) -> None:
                 for bounds, flat, out in work:
                     flight._run_chunks(bounds, flat, out, 0.05)
 
-            native()  # the same: every model size built first
-            per_throw = _best(native, repeats) / (steps * n)
+            per_throw = best_seconds(native, repeats) / (steps * n)
             line += f"   {n}: {per_throw * 1e6:5.1f} us/throw = {per_throw / big:4.2f}x"
         print(line)
 

@@ -13,21 +13,12 @@ The overhead is the adapter's time minus the bare task's. Each figure is the bes
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 
+from somarm.benchmarks import best_seconds
+
 __all__ = ["measure", "main"]
-
-
-def _best(fn, repeats: int) -> float:
-    fn()  # warm up, untimed: the batched MuJoCo models are built on first use
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def measure(task: str, *, n_envs: int, steps: int, repeats: int) -> dict[str, float]:
@@ -74,11 +65,11 @@ def measure(task: str, *, n_envs: int, steps: int, repeats: int) -> dict[str, fl
 
     per_batch, per_one = 1e6 / (steps * n_envs), 1e6 / steps
     return {
-        "task batched": _best(bare_batched, repeats) * per_batch,
-        "BatchedVecEnv": _best(vec, repeats) * per_batch,
-        "task single": _best(bare_single, repeats) * per_one,
-        "gymnasium env": _best(gym_single, repeats) * per_one,
-        "SyncVectorEnv": _best(gym_sync, repeats) * per_batch * 2,
+        "task batched": best_seconds(bare_batched, repeats) * per_batch,
+        "BatchedVecEnv": best_seconds(vec, repeats) * per_batch,
+        "task single": best_seconds(bare_single, repeats) * per_one,
+        "gymnasium env": best_seconds(gym_single, repeats) * per_one,
+        "SyncVectorEnv": best_seconds(gym_sync, repeats) * per_batch * 2,
     }
 
 
