@@ -4,14 +4,20 @@
 - In CI (``CI=true``) a skipped test is a failure: every part is required there (the browser
   tests need Chromium, which ``.ci/run`` installs, and the fault tests need root for a tmpfs), so
   a missing part must not turn a run green. Outside CI a skip stays a skip, with its reason.
+- Ctrl-C reaches the processes the tests start, even when pytest itself was started in the
+  background by a shell without job control (which starts it with SIGINT ignored, a disposition
+  its children would inherit, so that the Ctrl-C tests' signals would be lost).
 """
 
 import os
+import signal
 import subprocess
 
 import pytest
 
 os.environ.setdefault("MUJOCO_GL", "disable")
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def in_ci() -> bool:
