@@ -12,7 +12,7 @@ from collections import OrderedDict
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from dm_control.suite import base
+from dm_control.rl import control
 from dm_env import specs
 
 from somarm.streams import UniformStreams, trial_ids_for
@@ -212,7 +212,7 @@ def step_together(tasks: list[OneStepTask], actions: list[np.ndarray]) -> list[n
     return rewards
 
 
-class OneStepEnvTask(base.Task):
+class OneStepEnvTask(control.Task):
     """A dm_control ``Task`` running one episode of a ``OneStepTask`` per dm_env episode.
 
     The observation of episode k is the k-th observation of trial ``trial_id`` of a batch
@@ -221,7 +221,6 @@ class OneStepEnvTask(base.Task):
     """
 
     def __init__(self, batched: OneStepTask, *, observation_key: str):
-        super().__init__(random=int(batched.seed))  # unused: draws come from the task streams
         self.batched = batched
         self._key = observation_key
         self._observation = np.zeros(batched.observation_dim)

@@ -24,7 +24,7 @@ import math
 from collections import OrderedDict
 
 import numpy as np
-from dm_control.suite import base
+from dm_control.rl import control
 from dm_env import specs
 
 from somarm.streams import trial_generators, trial_ids_for
@@ -269,7 +269,7 @@ def load_physics() -> ObstaclePhysics:
     return ObstaclePhysics.from_xml_path(str(model_path("arm2_obstacle")))
 
 
-class ObstacleEnvTask(base.Task):
+class ObstacleEnvTask(control.Task):
     """dm_env side of ``reach2_obstacle``: one dm_env episode is one episode of trial 0 of a batch.
 
     The start pose of episode k is the one trial 0 of a batch with the same seed starts its k-th
@@ -278,7 +278,6 @@ class ObstacleEnvTask(base.Task):
     """
 
     def __init__(self, batched: Obstacle):
-        super().__init__(random=int(batched.seed))  # unused: draws come from the task's own streams
         self.batched = batched
         self._steps = 0
         self.sub_steps = batched.control_steps  #: timesteps per dm_env step (``tasks.load`` reads it)
