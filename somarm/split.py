@@ -21,23 +21,29 @@ import signal
 import traceback
 
 from somarm.run import RunConfig, RunResult, share_lanes, train_group
-from somarm.stopping import start_deaf_to_ctrl_c
+from somarm.stopping import end_with_parent, start_deaf_to_ctrl_c
 from somarm.tasks.pool import single_threaded
 
 __all__ = ["train_split"]
 
 
-def _worker(connection, configs: list[RunConfig], snapshots_at: tuple[int, ...]) -> None:
-    """Train one share (physics in this process's one thread) and send ``(kind, results or message)``."""
+def _worker(connection, configs: list[RunConfig], snapshots_at: tuple[int, ...], parent: int) -> None:
+    """Train one share (physics in this process's one thread) and send ``(kind, results or message)``;
+    stop as on SIGTERM if the ``parent`` process dies first."""
     from somarm import tasks
 
+    end_with_parent(parent)
     tasks.set_threads(1)
     try:
-        connection.send(("ok", train_group(configs, progress=False, snapshots_at=snapshots_at)))
-    except ValueError as exc:
-        connection.send(("error", str(exc)))
-    except BaseException:  # a bug: its traceback goes to the parent
-        connection.send(("crash", traceback.format_exc()))
+        try:
+            answer = ("ok", train_group(configs, progress=False, snapshots_at=snapshots_at))
+        except ValueError as exc:
+            answer = ("error", str(exc))
+        except BaseException:  # a bug: its traceback goes to the parent
+            answer = ("crash", traceback.format_exc())
+        connection.send(answer)
+    except BrokenPipeError:  # the parent died (end_with_parent stopped this share): nobody to answer
+        pass
     finally:
         connection.close()
 
@@ -61,7 +67,7 @@ def train_split(configs: list[RunConfig], *, processes: int, progress: bool = Tr
     workers = []
     for share in shares[1:]:
         mine, theirs = context.Pipe(duplex=False)
-        process = context.Process(target=_worker, args=(theirs, [configs[j] for j in share], snapshots_at),
+        process = context.Process(target=_worker, args=(theirs, [configs[j] for j in share], snapshots_at, os.getpid()),
                                   name="somarm-share", daemon=True)
         start_deaf_to_ctrl_c(process)
         theirs.close()

@@ -9,11 +9,15 @@ command still keeps what it finished.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
-__all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred", "start_deaf_to_ctrl_c"]
+__all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred", "start_deaf_to_ctrl_c",
+           "end_with_parent"]
 
 
 @contextlib.contextmanager
@@ -75,6 +79,22 @@ def start_deaf_to_ctrl_c(process) -> None:
         process.start()
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def end_with_parent(parent: int) -> None:
+    """In a worker process: receive SIGTERM when the process ``parent`` that started it dies.
+
+    A worker ignores Ctrl-C and relies on its parent to stop it; if the parent is killed outright
+    (SIGKILL, a crash), the worker would train on, or write figures into a folder that a new run may
+    already own. With this call it gets SIGTERM instead, which stops it the way the parent would
+    (between two steps). Linux only (``prctl(PR_SET_PDEATHSIG)``, which fires when the thread that
+    started the worker ends: workers are started from the main thread); elsewhere a no-op. A parent
+    that died before this call is caught by comparing ``os.getppid()``.
+    """
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))  # 1 = PR_SET_PDEATHSIG
+        if os.getppid() != parent:
+            os.kill(os.getpid(), signal.SIGTERM)
 
 
 @contextlib.contextmanager

@@ -93,3 +93,40 @@ def test_bad_jobs_is_one_line(tmp_path):
     done = subprocess.run([sys.executable, "-m", "somarm.cli", "reproduce", "--quick", "--jobs", "0", "--out",
                            str(tmp_path / "r")], capture_output=True, text=True, env=_ENV)
     assert done.returncode == 2 and done.stderr.strip() == "somarm: error: --jobs must be a whole number >= 1, got 0"
+
+
+def test_a_killed_parent_leaves_no_worker_running(tmp_path):
+    # SIGKILL gives the parent no chance to stop its workers: Fig. 25 at full length (minutes, its
+    # group shared with a process of the worker's own) must still stop within seconds, all of it.
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "somarm.cli", "reproduce", "--jobs", "2", "--out", str(tmp_path),
+         "--only", "more_inputs"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_ENV,
+    )
+    try:
+        line = ""
+        deadline = time.monotonic() + 60
+        while not (started := re.match(r"more_inputs: started in process (\d+)", line)) and time.monotonic() < deadline:
+            line = proc.stderr.readline()
+        assert started, line
+        worker = int(started.group(1))
+        time.sleep(10)  # the worker's group under way, its share process started
+        family = [worker, *map(int, subprocess.run(["pgrep", "-P", str(worker)], capture_output=True,
+                                                   text=True).stdout.split())]
+        assert len(family) >= 2, "the worker shares Fig. 25's group with a process of its own"
+        proc.kill()
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+    deadline = time.monotonic() + 45  # each stops between two steps
+    while (left := [pid for pid in family if _running(pid)]) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not left, f"process(es) {left} still running after the parent died"
+
+
+def _running(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has ended
+    except OSError:
+        return False

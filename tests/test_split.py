@@ -75,3 +75,31 @@ def _alive(pid: int) -> bool:
             return stat.read().rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has ended
     except FileNotFoundError:
         return False
+
+
+def test_a_killed_parent_leaves_no_worker_training():
+    # SIGKILL gives the parent no chance to stop its workers: each must notice by itself and end.
+    proc = subprocess.Popen([sys.executable, "-c", _SCRIPT], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=_ENV)
+    try:
+        assert proc.stdout.readline().strip() == "training"
+        time.sleep(8)  # the worker's share under way
+        children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
+        workers = [pid for pid in map(int, children) if "somarm.split" in _command(pid) or "spawn_main" in _command(pid)]
+        assert workers, "the second share runs in a worker process"
+        proc.kill()
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+    deadline = time.monotonic() + 30  # it stops between two steps
+    while (left := [pid for pid in workers if _alive(pid)]) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not left, f"worker(s) {left} still training after their parent died"
+
+
+def _command(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as cmdline:
+            return cmdline.read().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""

@@ -46,13 +46,16 @@ LONGEST_FIRST_QUICK = ("throw_maps", "beyond", "more_inputs", "delayed_reward", 
 _GRACE_S = 60.0
 
 
-def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend: str, threads: int) -> None:
+def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend: str, threads: int,
+            parent: int) -> None:
     """Run the experiments the parent sends, one at a time, until it sends None or hangs up; answer
-    each with ``("ok", section)`` or ``(kind, message)`` (after which this worker ends)."""
+    each with ``("ok", section)`` or ``(kind, message)`` (after which this worker ends). If the
+    ``parent`` process dies, SIGTERM stops the experiment under way as it would."""
     from somarm import tasks
-    from somarm.stopping import sigterm_as_interrupt
+    from somarm.stopping import end_with_parent, sigterm_as_interrupt
 
     sigterm_as_interrupt()
+    end_with_parent(parent)
     tasks.set_threads(threads)
     try:
         while (experiment := connection.recv()) is not None:
@@ -71,6 +74,8 @@ def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend:
             section.wall_time_s = time.perf_counter() - began
             connection.send(("ok", section))
     except (EOFError, KeyboardInterrupt):  # the parent hung up, or stopped this worker while it waited
+        return
+    except BrokenPipeError:  # the parent died (end_with_parent stopped this worker): nobody to answer
         return
     finally:
         connection.close()
@@ -97,7 +102,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
         mine, theirs = context.Pipe()
         # Not a daemon, for it may share out a long group between processes of its own (somarm.split);
         # every way out of this function stops and joins it (``_stop``).
-        process = context.Process(target=_worker, args=(theirs, out, quick, seeds, backend, threads),
+        process = context.Process(target=_worker, args=(theirs, out, quick, seeds, backend, threads, os.getpid()),
                                   name=f"somarm-worker-{i}")
         start_deaf_to_ctrl_c(process)
         theirs.close()
