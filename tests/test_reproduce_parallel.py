@@ -10,6 +10,8 @@ import subprocess
 import sys
 import time
 
+from processes import survivors_of_a_killed_parent
+
 from somarm.reproduce import runner
 
 _ENV = {**os.environ, "MUJOCO_GL": "disable"}
@@ -114,19 +116,8 @@ def test_a_killed_parent_leaves_no_worker_running(tmp_path):
         family = [worker, *map(int, subprocess.run(["pgrep", "-P", str(worker)], capture_output=True,
                                                    text=True).stdout.split())]
         assert len(family) >= 2, "the worker shares Fig. 25's group with a process of its own"
-        proc.kill()
-        proc.wait(timeout=30)
+        left = survivors_of_a_killed_parent(proc, family, 45)  # each stops between two steps
     finally:
         proc.kill()
-    deadline = time.monotonic() + 45  # each stops between two steps
-    while (left := [pid for pid in family if _running(pid)]) and time.monotonic() < deadline:
-        time.sleep(0.2)
     assert not left, f"process(es) {left} still running after the parent died"
 
-
-def _running(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as stat:
-            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has ended
-    except OSError:
-        return False

@@ -10,6 +10,7 @@ import textwrap
 import time
 
 import numpy as np
+from processes import still_running, survivors_of_a_killed_parent
 
 from somarm import run
 from somarm.run import RunConfig
@@ -63,18 +64,8 @@ def test_ctrl_c_stops_both_shares_and_leaves_no_worker(tmp_path):
         proc.kill()
     assert proc.returncode == 0, err
     assert "interrupted True [True, True]" in out
-    deadline = time.monotonic() + 10  # multiprocessing's resource tracker may take a moment to follow
-    while (left := [pid for pid in map(int, children) if _alive(pid)]) and time.monotonic() < deadline:
-        time.sleep(0.2)
+    left = still_running(map(int, children), 10)  # multiprocessing's resource tracker may take a moment
     assert not left, f"worker(s) {left} still running"
-
-
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as stat:
-            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has ended
-    except FileNotFoundError:
-        return False
 
 
 def test_a_killed_parent_leaves_no_worker_training():
@@ -87,13 +78,9 @@ def test_a_killed_parent_leaves_no_worker_training():
         children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
         workers = [pid for pid in map(int, children) if "somarm.split" in _command(pid) or "spawn_main" in _command(pid)]
         assert workers, "the second share runs in a worker process"
-        proc.kill()
-        proc.wait(timeout=30)
+        left = survivors_of_a_killed_parent(proc, workers, 30)  # it stops between two steps
     finally:
         proc.kill()
-    deadline = time.monotonic() + 30  # it stops between two steps
-    while (left := [pid for pid in workers if _alive(pid)]) and time.monotonic() < deadline:
-        time.sleep(0.2)
     assert not left, f"worker(s) {left} still training after their parent died"
 
 
