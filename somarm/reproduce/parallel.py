@@ -79,6 +79,12 @@ def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend:
         return
     finally:
         connection.close()
+    # Told to end with every answer sent and every file written (atomically, closed): leave without
+    # the interpreter's teardown, which takes about a second once numba has compiled (the parent
+    # waits for it).
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
 
 
 def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs: int, quick: bool,
@@ -125,7 +131,10 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                     process.join()
                     kind, payload = "crash", f"its process ended without an answer (exit code {process.exitcode})"
                 if kind == "ok":
-                    idle.append((connection, process))
+                    if waiting:
+                        idle.append((connection, process))
+                    else:  # nothing left for it: it ends now, beside the others' last experiments
+                        connection.send(None)
                     finished(name, payload)
                 elif kind == "interrupted":
                     raise KeyboardInterrupt
@@ -133,7 +142,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                     raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
                 else:
                     raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
-        for connection, _ in workers:  # no more work: each worker ends after its last experiment
+        for connection, _ in idle:  # never given an experiment (more workers than experiments)
             connection.send(None)
     except KeyboardInterrupt:
         print("\ninterrupted; the report holds the experiments that finished", file=sys.stderr)
