@@ -18,31 +18,22 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
-import traceback
 
 from somarm.run import RunConfig, RunResult, share_lanes, train_group
-from somarm.stopping import end_with_parent, start_deaf_to_ctrl_c
 from somarm.tasks.pool import single_threaded
+from somarm.workers import outcome, start
 
 __all__ = ["train_split"]
 
 
-def _worker(connection, configs: list[RunConfig], snapshots_at: tuple[int, ...], parent: int) -> None:
-    """Train one share (physics in this process's one thread) and send ``(kind, results or message)``;
-    stop as on SIGTERM if the ``parent`` process dies first."""
+def _worker(connection, configs: list[RunConfig], snapshots_at: tuple[int, ...]) -> None:
+    """Train one share (physics in this process's one thread) and send ``workers.outcome``'s answer."""
     from somarm import tasks
 
-    end_with_parent(parent)
     tasks.set_threads(1)
     try:
-        try:
-            answer = ("ok", train_group(configs, progress=False, snapshots_at=snapshots_at))
-        except ValueError as exc:
-            answer = ("error", str(exc))
-        except BaseException:  # a bug: its traceback goes to the parent
-            answer = ("crash", traceback.format_exc())
-        connection.send(answer)
-    except BrokenPipeError:  # the parent died (end_with_parent stopped this share): nobody to answer
+        connection.send(outcome(lambda: train_group(configs, progress=False, snapshots_at=snapshots_at)))
+    except BrokenPipeError:  # the parent died (its death stopped this share): nobody to answer
         pass
     finally:
         connection.close()
@@ -66,12 +57,8 @@ def train_split(configs: list[RunConfig], *, processes: int, progress: bool = Tr
     context = multiprocessing.get_context("spawn")
     workers = []
     for share in shares[1:]:
-        mine, theirs = context.Pipe(duplex=False)
-        process = context.Process(target=_worker, args=(theirs, [configs[j] for j in share], snapshots_at, os.getpid()),
-                                  name="somarm-share", daemon=True)
-        start_deaf_to_ctrl_c(process)
-        theirs.close()
-        workers.append((mine, process))
+        workers.append(start(context, _worker, ([configs[j] for j in share], snapshots_at), name="somarm-share",
+                             duplex=False, daemon=True))
     results: list[RunResult | None] = [None] * len(configs)
     stopped = False
     try:

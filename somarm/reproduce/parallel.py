@@ -24,14 +24,13 @@ import os
 import signal
 import sys
 import time
-import traceback
 from collections.abc import Callable
 from multiprocessing.connection import wait
 from pathlib import Path
 
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section
-from somarm.stopping import start_deaf_to_ctrl_c
+from somarm.workers import outcome, start
 
 __all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "run"]
 
@@ -46,36 +45,28 @@ LONGEST_FIRST_QUICK = ("throw_maps", "beyond", "more_inputs", "delayed_reward", 
 _GRACE_S = 60.0
 
 
-def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend: str, threads: int,
-            parent: int) -> None:
+def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend: str, threads: int) -> None:
     """Run the experiments the parent sends, one at a time, until it sends None or hangs up; answer
-    each with ``("ok", section)`` or ``(kind, message)`` (after which this worker ends). If the
-    ``parent`` process dies, SIGTERM stops the experiment under way as it would."""
+    each with ``workers.outcome``'s ``(kind, section or message)`` (after anything but "ok" this
+    worker ends). SIGTERM, from the parent or at its death, stops the experiment under way."""
     from somarm import tasks
-    from somarm.stopping import end_with_parent, sigterm_as_interrupt
+    from somarm.stopping import sigterm_as_interrupt
 
     sigterm_as_interrupt()
-    end_with_parent(parent)
     tasks.set_threads(threads)
     try:
         while (experiment := connection.recv()) is not None:
             began = time.perf_counter()
-            try:
-                section = run_experiment(experiment, out, quick=quick, seeds=seeds, progress=False, backend=backend)
-            except KeyboardInterrupt:
-                connection.send(("interrupted", ""))
+            kind, payload = outcome(lambda experiment=experiment: run_experiment(
+                experiment, out, quick=quick, seeds=seeds, progress=False, backend=backend))
+            if kind == "ok":
+                payload.wall_time_s = time.perf_counter() - began
+            connection.send((kind, payload))
+            if kind != "ok":
                 return
-            except ValueError as exc:  # a one-line user-facing error (a full disk, say)
-                connection.send(("error", str(exc)))
-                return
-            except BaseException:  # a bug: its traceback goes to the parent, which shows it
-                connection.send(("crash", traceback.format_exc()))
-                return
-            section.wall_time_s = time.perf_counter() - began
-            connection.send(("ok", section))
     except (EOFError, KeyboardInterrupt):  # the parent hung up, or stopped this worker while it waited
         return
-    except BrokenPipeError:  # the parent died (end_with_parent stopped this worker): nobody to answer
+    except BrokenPipeError:  # the parent died (its death stopped this worker): nobody to answer
         return
     finally:
         connection.close()
@@ -105,14 +96,10 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
     waiting = sorted(experiments, key=lambda n: order.index(n) if n in order else len(order))
     workers: list = []  # (connection, process), started once and given one experiment after another
     for i in range(min(jobs, len(waiting))):
-        mine, theirs = context.Pipe()
         # Not a daemon, for it may share out a long group between processes of its own (somarm.split);
         # every way out of this function stops and joins it (``_stop``).
-        process = context.Process(target=_worker, args=(theirs, out, quick, seeds, backend, threads, os.getpid()),
-                                  name=f"somarm-worker-{i}")
-        start_deaf_to_ctrl_c(process)
-        theirs.close()
-        workers.append((mine, process))
+        workers.append(start(context, _worker, (out, quick, seeds, backend, threads), name=f"somarm-worker-{i}",
+                             duplex=True))
     idle = list(workers)
     running: dict = {}  # connection -> (name, process)
     try:
@@ -142,8 +129,6 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                     raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
                 else:
                     raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
-        for connection, _ in idle:  # never given an experiment (more workers than experiments)
-            connection.send(None)
     except KeyboardInterrupt:
         print("\ninterrupted; the report holds the experiments that finished", file=sys.stderr)
         return 130
