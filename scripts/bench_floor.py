@@ -49,15 +49,18 @@ PAPER = ("reach2", "reach20", "four_goals", "throw", "throw_maps", "neighbourhoo
 
 
 def _throws(name: str, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    """``n`` throws of a task: its observations' conditions, uniform launch velocities, their steps."""
+    """``n`` throws of a task: its observations' conditions and uniform launch velocities."""
     task = tasks.make(name)
     c = task.conditions(task.sample_observations(rng, n))
     out = {k: np.broadcast_to(np.asarray(c[k], dtype=np.float64), (n,)).copy() for k in ("Fr", "W", "M")}
     out["ux"], out["uy"] = rng.uniform(0.0, 1.0, (2, n))
-    out["k"] = out["Fr"] / out["M"]
-    out["scale"] = flight.step_for(out["ux"], out["uy"], out["W"], out["k"], G=0.05)
-    out["lengths"] = 2.0 * (out["uy"] / out["scale"]) / (0.05 * flight.SCALED_STEP)
     return out
+
+
+def _plan(t: dict[str, np.ndarray], part: slice = slice(None)):
+    """The tasks' own plan of these throws in one thread (steps, sorting, chunks; ``flight._plan``)."""
+    return flight._plan(*(t[key][part] for key in ("ux", "uy", "Fr", "W", "M")), G=0.05,
+                        tolerance=flight.DEFAULT_TOLERANCE, workers=1, chunk=flight._CHUNK)
 
 
 def dm_env_floor(episodes: int, repeats: int) -> None:
@@ -69,7 +72,7 @@ def dm_env_floor(episodes: int, repeats: int) -> None:
     bare = flight.ProjectileBatch(1, G=0.05)  # the leanest model a throw can fly in: one body, two joints
     for name in THROWS:
         t = _throws(name, episodes, np.random.default_rng(0))
-        steps = np.ceil(t["lengths"] - 1e-9).astype(int) + 1  # the steps a flight takes (max_steps_for)
+        steps = flight._model_steps(_plan(t).lengths).astype(int)  # the steps each flight takes
         env = tasks.load(name)
         actions = np.stack([t["ux"], t["uy"]], axis=-1)
 
@@ -102,17 +105,11 @@ def step_floor(large: int, steps: int, repeats: int) -> None:
         big = best_seconds(batch, repeats) / large
         line = f"  {name:15s} large batch {big * 1e6:5.1f} us/throw"
         for n in (100, 20):
-            work = []
-            for j in range(steps):
-                part = slice(j * n, (j + 1) * n)
-                order = np.argsort(t["lengths"][part], kind="stable")
-                flat = tuple(t[key][part][order] for key in ("ux", "uy", "k", "W", "scale"))
-                shares, _ = flight._schedule(t["lengths"][part][order], flight._CHUNK, 1)
-                work.append((shares[0], flat, np.empty(n)))
+            plans = [_plan(t, slice(j * n, (j + 1) * n)) for j in range(steps)]
 
-            def native(work=work):
-                for bounds, flat, out in work:
-                    flight._run_chunks(bounds, flat, out, 0.05)
+            def native(plans=plans):
+                for plan in plans:
+                    flight._fly(plan, 0.05)
 
             per_throw = best_seconds(native, repeats) / (steps * n)
             line += f"   {n}: {per_throw * 1e6:5.1f} us/throw = {per_throw / big:4.2f}x"

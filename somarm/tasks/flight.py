@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import threading
+from typing import NamedTuple
 
 import mujoco
 import numba
@@ -522,27 +523,47 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
     """
     arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ux, uy, Fr, W, M)))
     shape = arrays[0].shape
-    ux_, uy_, Fr_, W_, M_ = (np.ascontiguousarray(a).ravel() for a in arrays)
-    total = ux_.size
-    if total == 0:
+    if arrays[0].size == 0:
         return np.empty(shape)
-    k = Fr_ / M_
-    scale = step_for(ux_, uy_, W_, k, G=G, tolerance=tolerance)
-    lengths = 2.0 * (uy_ / scale) / (G * SCALED_STEP)  # flight in model steps
-    order = np.argsort(lengths, kind="stable")
-    # The throws in flight order, so that every chunk is a slice (a view, no gathering).
-    flat = tuple(a[order] for a in (ux_, uy_, k, W_, scale))
-    landed = np.empty(total)
     workers = max(1, threads_here(THREADS) if n_threads is None else n_threads)
-    shares, _ = _schedule(lengths[order], max(1, chunk), workers)
-    if len(shares) == 1:
-        _run_chunks(shares[0], flat, landed, G)
+    plan = _plan(*(np.ascontiguousarray(a).ravel() for a in arrays), G=G, tolerance=tolerance, workers=workers,
+                 chunk=chunk)
+    landed = _fly(plan, G)
+    out = np.empty(len(landed))
+    out[plan.order] = landed
+    return out.reshape(shape)
+
+
+class _Plan(NamedTuple):
+    """A batch ready to fly: its throws sorted by flight length, and how they are shared out."""
+
+    order: np.ndarray  #: the sorting permutation of the batch
+    flat: tuple  #: ux, uy, k, W and scale (each throw's RK4 step) in flight order
+    lengths: np.ndarray  #: flights in model steps, ascending
+    shares: list  #: chunks ``(start, stop)`` of the sorted throws per thread (``_schedule``)
+
+
+def _plan(ux, uy, Fr, W, M, *, G: float, tolerance: float, workers: int, chunk: int) -> _Plan:
+    """Each throw's step, the flights sorted by length (every chunk then a slice, a view), and the
+    schedule of their chunks over ``workers`` threads (1-D arrays of one length)."""
+    k = Fr / M
+    scale = step_for(ux, uy, W, k, G=G, tolerance=tolerance)
+    lengths = 2.0 * (uy / scale) / (G * SCALED_STEP)  # flight in model steps
+    order = np.argsort(lengths, kind="stable")
+    lengths = lengths[order]
+    shares, _ = _schedule(lengths, max(1, chunk), workers)
+    return _Plan(order, tuple(a[order] for a in (ux, uy, k, W, scale)), lengths, shares)
+
+
+def _fly(plan: _Plan, G: float) -> np.ndarray:
+    """Landing x of a planned batch, in flight order; the shares beyond the first on the shared pool."""
+    landed = np.empty(len(plan.order))
+    if len(plan.shares) == 1:
+        _run_chunks(plan.shares[0], plan.flat, landed, G)
     else:
-        pool = shared_pool(len(shares))
-        futures = [pool.submit(_run_chunks, share, flat, landed, G) for share in shares[1:]]
-        _run_chunks(shares[0], flat, landed, G)  # the calling thread takes a share too
+        pool = shared_pool(len(plan.shares))
+        futures = [pool.submit(_run_chunks, share, plan.flat, landed, G) for share in plan.shares[1:]]
+        _run_chunks(plan.shares[0], plan.flat, landed, G)  # the calling thread takes a share too
         for future in futures:
             future.result()
-    out = np.empty(total)
-    out[order] = landed
-    return out.reshape(shape)
+    return landed
