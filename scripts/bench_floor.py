@@ -20,7 +20,6 @@ Usage:
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import os
@@ -42,6 +41,7 @@ from somarm.benchmarks import best_seconds  # noqa: E402
 from somarm.reproduce import common, runner  # noqa: E402
 from somarm.tasks import arms, flight  # noqa: E402
 from somarm.tasks.assets import model_path  # noqa: E402
+from somarm.validation import OneLineParser  # noqa: E402
 
 THROWS = ("throw", "throw_distance", "throw_wind", "throw_friction", "throw_mass")
 #: The paper's experiments (what the 120 s target covers), in the paper's order.
@@ -187,10 +187,15 @@ def paper_floor(quick: bool, cores: int, names: tuple[str, ...] = PAPER) -> dict
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """Print the three parts; 0, or 2 after one line naming a bad option."""
+    parser = OneLineParser(prog="bench_floor.py", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes and the --quick experiments")
     parser.add_argument("--skip-paper", action="store_true", help="only the dm_env and training-step parts")
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except ValueError as exc:
+        print(f"bench_floor.py: error: {exc} (allowed: --quick, --skip-paper)", file=sys.stderr)
+        return 2
     repeats = 1 if args.quick else 4
     dm_env_floor(episodes=50 if args.quick else 400, repeats=repeats)
     step_floor(large=6000 if args.quick else 60_000, steps=5 if args.quick else 60, repeats=repeats)

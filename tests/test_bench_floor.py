@@ -42,3 +42,9 @@ def test_the_clock_counts_mujoco_and_kernels_and_puts_everything_back(capsys):
     assert totals["mujoco"] + totals["kernels"] <= 2 * totals["wall"]
     assert totals["floor"] == (totals["mujoco"] + totals["kernels"]) / 2
     assert (flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS) == saved
+
+
+def test_a_bad_option_is_one_line(capsys):
+    assert _load().main(["--fast"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--fast" in err and "--quick" in err
