@@ -1,4 +1,4 @@
-"""Where the time goes, and the floor MuJoCo and the learners set under issue 12's speed targets.
+"""Where the time goes, and the floor MuJoCo and the learners' kernels set under the time of an experiment.
 
 Three measurements, each in one run on this machine:
 
@@ -36,8 +36,9 @@ os.environ.setdefault("MUJOCO_GL", "disable")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from somarm import somq, tasks  # noqa: E402
+from somarm import tasks  # noqa: E402
 from somarm.benchmarks import best_seconds  # noqa: E402
+from somarm.learners import somq
 from somarm.reproduce import common, runner  # noqa: E402
 from somarm.tasks import arms, flight  # noqa: E402
 from somarm.tasks.assets import model_path  # noqa: E402

@@ -37,7 +37,7 @@ def _cmd_tasks(args) -> int:
 
 
 def _cmd_presets(args) -> int:
-    from somarm import presets
+    from somarm.learners import presets
 
     for name in presets.PRESETS:
         print(f"{name:10s} {presets.describe(name)}")
@@ -46,7 +46,7 @@ def _cmd_presets(args) -> int:
 
 def _cmd_train(args) -> int:
     from somarm import run
-    from somarm.run_folder import claim
+    from somarm.run.folder import claim
 
     if args.port is not None and not 0 <= args.port <= 65535:
         raise ValueError(f"--port must be in 0..65535, got {args.port}")
@@ -63,7 +63,7 @@ def _cmd_train(args) -> int:
 def _train_into(out: Path, group, args, owner) -> int:
     """Train a built run group of one config into the claimed folder ``out``; the exit status."""
     from somarm import run
-    from somarm.stopping import signals_deferred, sigterm_as_interrupt
+    from somarm.run.stopping import signals_deferred, sigterm_as_interrupt
 
     config = group.configs[0]
     sigterm_as_interrupt()
@@ -109,7 +109,8 @@ def _train_into(out: Path, group, args, owner) -> int:
 
 
 def _cmd_evaluate(args) -> int:
-    from somarm import evaluation, run
+    from somarm import run
+    from somarm.run import evaluation
 
     check_int("--observations", args.observations)
     check_int("--seed", args.seed, minimum=0)
@@ -125,8 +126,8 @@ def _cmd_evaluate(args) -> int:
 
 def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
-    from somarm.run_folder import REPORT_FILES, claim
-    from somarm.stopping import sigterm_as_interrupt
+    from somarm.run.folder import REPORT_FILES, claim
+    from somarm.run.stopping import sigterm_as_interrupt
     from somarm.validation import check_int
 
     runner.check_names(args.only)
@@ -145,10 +146,11 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_compare(args) -> int:
-    from somarm import compare, tasks
-    from somarm.run_config import parse_assignments
-    from somarm.run_folder import claim
-    from somarm.stopping import sigterm_as_interrupt
+    from somarm import tasks
+    from somarm.peers import compare
+    from somarm.run.config import parse_assignments
+    from somarm.run.folder import claim
+    from somarm.run.stopping import sigterm_as_interrupt
 
     config = compare.CompareConfig(
         task=args.task,

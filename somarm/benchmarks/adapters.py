@@ -3,7 +3,7 @@
 In one run, on one task (reach2 by default, the cheapest physics, so the adapters' share shows):
 
 - the batched task itself, ``reset`` + ``step`` of ``--envs`` trials (per trial-step), against
-  ``somarm.vec_env.BatchedVecEnv`` with as many envs (per env-step; it builds the per-env info dicts);
+  ``somarm.peers.vec_env.BatchedVecEnv`` with as many envs (per env-step; it builds the per-env info dicts);
 - ``tasks.make(n_trials=1)`` against one ``gymnasium.make("somarm/<Name>-v0")`` env, and against
   Gymnasium's ``SyncVectorEnv`` of ``--envs`` separate envs (per env-step).
 
@@ -26,8 +26,8 @@ def measure(task: str, *, n_envs: int, steps: int, repeats: int) -> dict[str, fl
     import gymnasium
 
     from somarm import tasks
-    from somarm.gym import env_id, to_task_actions
-    from somarm.vec_env import BatchedVecEnv
+    from somarm.peers.gym import env_id, to_task_actions
+    from somarm.peers.vec_env import BatchedVecEnv
 
     batched = tasks.make(task, n_trials=n_envs)
     single = tasks.make(task)

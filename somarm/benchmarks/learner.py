@@ -1,7 +1,7 @@
 """``somarm bench learner``: microseconds per trial-step of SOM-Q act + learn, beside the reference.
 
 For the paper's map sizes and n_trials = 1, 20 and 100, the batched, compiled learner
-(``somarm.somq.SOMQ``) and the line-by-line reference (``somarm.reference.ReferenceSOMQ``, one
+(``somarm.learners.somq.SOMQ``) and the line-by-line reference (``somarm.learners.reference.ReferenceSOMQ``, one
 trial) run the same number of steps from the same t in the same process, so their ratio is
 meaningful even on a busy machine. Observations are uniform in the box and rewards are uniform
 in [-1, 0): the learner's cost does not depend on where they come from, only on how often the
@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..presets import get
-from ..reference import ReferenceSOMQ
-from ..somq import SOMQ, SOMQConfig
-from ..validation import OneLineParser, check_int, check_int_list
+from somarm.learners.presets import get
+from somarm.learners.reference import ReferenceSOMQ
+from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.validation import OneLineParser, check_int, check_int_list
 
 __all__ = ["Case", "CASES", "time_batched", "time_reference", "interpolated_rows", "main"]
 
@@ -88,7 +88,7 @@ def interpolated_rows(n_steps: int, repeats: int, *, n_trials: int = 100, late: 
     Both run at ``t0 = 0`` (mostly exploring steps) and at ``t0 = late`` (mostly greedy steps, where
     the blend is computed), ``n_trials`` trials, best of ``repeats``; the issue's target is <= 2x.
     """
-    print(f"\ninterpolated response (somarm.interpolation) against the winner's, {n_trials} trials")
+    print(f"\ninterpolated response (somarm.learners.interpolation) against the winner's, {n_trials} trials")
     print(f"{'maps':36s} {'from t':>7s} {'winner us':>10s} {'interpolated us':>16s} {'ratio':>7s}")
     ratios = []
     for case in CASES:
@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     check_int("--t0", args.t0, minimum=0)
     trial_counts = check_int_list("--trials", args.trials)
     print(f"SOM-Q act + learn, {n_steps} steps from t = {args.t0}, best of {repeats}; "
-          "reference = line-by-line single trial (somarm.reference)")
+          "reference = line-by-line single trial (somarm.learners.reference)")
     print(f"{'maps':36s} {'n_trials':>8s} {'batched us/trial-step':>22s} {'reference us/step':>18s} "
           f"{'ratio':>7s}")
     verdict = None

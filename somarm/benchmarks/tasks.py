@@ -54,8 +54,7 @@ def _difference(name: str, task, observations: np.ndarray, actions: np.ndarray) 
         mj = throw_module.landing_x(actions[:, 0], actions[:, 1], backend="mujoco", **kwargs)
         an = throw_module.landing_x(actions[:, 0], actions[:, 1], backend="analytic", **kwargs)
         return float(np.abs(mj - an).max())
-    from somarm import kinematics
-    from somarm.tasks import arms
+    from somarm.tasks import arms, kinematics
 
     n_links = actions.shape[1]
     return float(np.abs(arms.fingertips(actions, n_links) - kinematics.forward(actions, arms.LINK_LENGTHS[n_links])).max())

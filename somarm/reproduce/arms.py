@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm import evaluation, metrics, plots
+from somarm import plots
+from somarm.reproduce import metrics
 from somarm.reproduce.common import (
     MOTORIC_CHOICE,
     Context,
@@ -16,7 +17,7 @@ from somarm.reproduce.common import (
     typical_trial,
 )
 from somarm.reproduce.report import Claim, Section
-from somarm.run import RunConfig
+from somarm.run import RunConfig, evaluation
 
 __all__ = ["reach2", "reach20", "four_goals"]
 
@@ -184,8 +185,7 @@ def _posture_distance(postures: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.
 
 def reach20(ctx: Context) -> Section:
     """Fig. 11: the 20-link arm, greedy postures for a sweep of goals."""
-    from somarm import kinematics
-    from somarm.tasks import arms
+    from somarm.tasks import arms, kinematics
 
     n_trials, n_steps = ctx.pick(5, 1), ctx.pick(50_000, 3_000)
     config = RunConfig(task="reach20", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)

@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm import evaluation, plots
+from somarm import plots
+from somarm.learners.somq import RESPONSES
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
 from somarm.reproduce.report import Claim, Section
-from somarm.run import RunConfig
-from somarm.somq import RESPONSES
+from somarm.run import RunConfig, evaluation
 
 __all__ = ["TARGETS", "beyond"]
 

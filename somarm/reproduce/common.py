@@ -12,7 +12,7 @@ import numpy as np
 from somarm import plots, tasks
 from somarm.reproduce.report import Section, merge_seeds
 from somarm.run import RunConfig, RunResult, final_rewards, train_group
-from somarm.split import train_split
+from somarm.run.split import train_split
 
 __all__ = [
     "SPLIT_TRIAL_STEPS",
@@ -29,7 +29,7 @@ __all__ = [
 
 
 #: A group of at least this many trial-steps trains in as many processes as there are threads
-#: (``somarm.split``): the paper-scale groups of Figs. 13, 24 and 25 and of the beyond part (a
+#: (``somarm.run.split``): the paper-scale groups of Figs. 13, 24 and 25 and of the beyond part (a
 #: process's start-up, about 3 s, is not worth it for a quick run's groups).
 SPLIT_TRIAL_STEPS = 1_000_000
 
@@ -115,7 +115,7 @@ def _backend(task: str, backend: str) -> str:
 
 def preset_choices(*names: str) -> list[str]:
     """The choices the named presets make where their tables are silent, as report lines."""
-    from somarm import presets
+    from somarm.learners import presets
 
     return [
         f"Preset `{name}` ({presets.PRESETS[name].description.split(':')[0]}): {choice}."

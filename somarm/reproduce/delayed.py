@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm import evaluation
 from somarm.reproduce.common import Context, fmt, preset_choices, run_group
 from somarm.reproduce.report import Claim, Section
-from somarm.run import RunConfig
+from somarm.run import RunConfig, evaluation
 from somarm.tasks import obstacle, obstacle_search
 
 __all__ = ["delayed_reward"]

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section
-from somarm.workers import outcome, start
+from somarm.run.workers import outcome, start
 
 __all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "run"]
 
@@ -50,7 +50,7 @@ def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend:
     each with ``workers.outcome``'s ``(kind, section or message)`` (after anything but "ok" this
     worker ends). SIGTERM, from the parent or at its death, stops the experiment under way."""
     from somarm import tasks
-    from somarm.stopping import sigterm_as_interrupt
+    from somarm.run.stopping import sigterm_as_interrupt
 
     sigterm_as_interrupt()
     tasks.set_threads(threads)
@@ -96,7 +96,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
     waiting = sorted(experiments, key=lambda n: order.index(n) if n in order else len(order))
     workers: list = []  # (connection, process), started once and given one experiment after another
     for i in range(min(jobs, len(waiting))):
-        # Not a daemon, for it may share out a long group between processes of its own (somarm.split);
+        # Not a daemon, for it may share out a long group between processes of its own (somarm.run.split);
         # every way out of this function stops and joins it (``_stop``).
         workers.append(start(context, _worker, (out, quick, seeds, backend, threads), name=f"somarm-worker-{i}",
                              duplex=True))

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm import compare
-from somarm.plots_compare import NAMES
+from somarm.learners.tabular import MAX_TABLE_ENTRIES, TabularConfig
+from somarm.peers import compare
+from somarm.peers.figure import NAMES
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
-from somarm.tabular import MAX_TABLE_ENTRIES, TabularConfig
 
 __all__ = ["TASKS", "peers", "table"]
 
@@ -96,7 +96,7 @@ def peers(ctx: Context) -> Section:
         f"{', '.join(f'{fmt(n)} samples on {t}' for t, n in budgets.items())}"
         f"{'' if ctx.quick else ' (the tasks default run lengths)'}, TD3 and SAC for "
         f"{peer_samples} samples (each costs a gradient step); {seeds} seed(s), the same for every learner.",
-        "TD3 and SAC use Stable-Baselines3's defaults (MlpPolicy, torch on one thread) through `somarm.gym`; "
+        "TD3 and SAC use Stable-Baselines3's defaults (MlpPolicy, torch on one thread) through `somarm.peers.gym`; "
         "every setting is written into each `compare.json`.",
         "The tabular learner: 16 cells per observation dimension, 16 actions per action dimension, sample-mean Q, "
         "epsilon = 1/(t/1000 + 1) (as SOM-Q's p in Table 1).",

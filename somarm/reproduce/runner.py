@@ -10,8 +10,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from somarm import __version__
-from somarm.compare import peers_missing
 from somarm.io import atomic_write_json, atomic_write_text
+from somarm.peers.compare import peers_missing
 from somarm.reproduce import arms, beyond, delayed, peers, throws
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section, claim_record, render

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm import ballistics, evaluation, metrics, plots
+from somarm import plots
+from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, run_group, typical_trial
 from somarm.reproduce.report import Claim, Section
-from somarm.run import RunConfig
+from somarm.run import RunConfig, evaluation
+from somarm.tasks import ballistics
 
 __all__ = ["throw", "throw_maps", "neighbourhood_q", "more_inputs"]
 

@@ -35,7 +35,7 @@ def main(args: argparse.Namespace) -> int:
       ValueError: a bad option, spec or point (one line), before anything runs.
     """
     from somarm import run
-    from somarm.stopping import sigterm_as_interrupt
+    from somarm.run.stopping import sigterm_as_interrupt
     from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
     from somarm.validation import check_int
 

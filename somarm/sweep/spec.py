@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.run_config import RunConfig
+from somarm.run.config import RunConfig
 from somarm.validation import check_int
 
 __all__ = ["TASK_PREFIX", "Axis", "SweepSpec", "parse_grid", "parse_random", "preset_value", "same_value", "config_key"]
@@ -199,8 +199,9 @@ def preset_value(spec: SweepSpec, key: str) -> str | None:
 
     None where the preset has no single value for it (e.g. ``decay`` when schedules differ).
     """
-    from somarm import presets, tasks
-    from somarm.schedules import Schedule
+    from somarm import tasks
+    from somarm.learners import presets
+    from somarm.learners.schedules import Schedule
 
     if key.startswith(TASK_PREFIX):
         name = key[len(TASK_PREFIX):]
@@ -231,7 +232,7 @@ def _decay_text(decay) -> str:
 
 def same_value(a: str, b: str) -> bool:
     """Two ``--set`` values mean the same (``1`` and ``1.0``; ``inv:1000`` and ``inv:1000.0``)."""
-    from somarm.schedules import parse_decay
+    from somarm.learners.schedules import parse_decay
 
     for parse in (float, parse_decay):
         try:

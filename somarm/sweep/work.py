@@ -13,8 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from somarm import presets, run
-from somarm.run_config import RunConfig
+from somarm import run
+from somarm.learners import presets
+from somarm.run.config import RunConfig
 from somarm.sweep.spec import SweepSpec, config_key
 
 __all__ = ["Chunk", "plan_chunks", "validate_points", "run_chunk", "point_label", "failed_row", "METRICS"]

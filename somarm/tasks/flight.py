@@ -18,8 +18,8 @@ quartic Taylor polynomial R(z) of exp(-z), ``z = k h``, each step, and moves x b
 ``1 <= R exp(z) <= 1 + d``, ``d = exp(z) z^5 / 120`` (for z <= 1), hence the bound
 ``|u0| exp(-kT) expm1(N d) / k``, about ``|u0| k^4 h^4 T exp(-kT) / 120``. ``step_for`` picks
 the smallest N within the tolerance: drag-free throws take one step, Table 6's strongest drag and
-wind about 60. (Until round 2 the steps came from a fixed ladder of round values and a
-leading-order bound over every flight time: about twice the steps.)
+wind about 60. (A fixed ladder of round step sizes under a leading-order bound over every flight
+time would take about twice the steps.)
 
 Throws of different steps share one model through a change of time scale: a throw whose step
 is ``c`` is simulated in the time ``s = t / c`` with the model's step ``SCALED_STEP = 1``, its
@@ -48,8 +48,8 @@ import numba
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from somarm.ballistics import flight_time
 from somarm.tasks.assets import model_path
+from somarm.tasks.ballistics import flight_time
 from somarm.tasks.pool import shared_pool, threads_here
 
 __all__ = ["DEFAULT_TOLERANCE", "MAX_KH", "SCALED_STEP", "error_bound", "step_for", "fly",

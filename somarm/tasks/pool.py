@@ -2,7 +2,7 @@
 
 MuJoCo releases the GIL while it steps, so a large batch split over threads runs in parallel.
 A thread that is itself one of several working side by side (the lanes of a lockstep group,
-``somarm.training``) keeps its batches to itself: ``single_threaded`` holds ``threads_here`` at 1.
+``somarm.run.loop``) keeps its batches to itself: ``single_threaded`` holds ``threads_here`` at 1.
 """
 
 from __future__ import annotations

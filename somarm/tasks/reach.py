@@ -18,8 +18,7 @@ import math
 
 import numpy as np
 
-from somarm import kinematics
-from somarm.tasks import actuation, arms
+from somarm.tasks import actuation, arms, kinematics
 from somarm.tasks.base import OneStepEnvTask, OneStepTask
 from somarm.tasks.pool import threads_here
 from somarm.tasks.record import TaskRecord

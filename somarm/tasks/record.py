@@ -48,7 +48,7 @@ class TaskRecord:
     environment: Callable[[Any], tuple[Any, Any]]
     """``environment(batched) -> (physics, dm_control task)`` for the dm_env interface."""
     preset: str
-    """The paper's parameter table this task trains with by default (``somarm.presets``)."""
+    """The paper's parameter table this task trains with by default (``somarm.learners.presets``)."""
     n_steps: int
     """Default training steps (the paper gives run lengths only for Fig. 17: these are this
     project's choice elsewhere)."""
@@ -64,7 +64,7 @@ class TaskRecord:
     once, as Fig. 16)."""
     episodic: bool = False
     """Episodes last several steps (the task's ``step`` sets ``next_observations``/``terminal``);
-    False for the one-step tasks (``somarm.gym`` adapts those)."""
+    False for the one-step tasks (``somarm.peers.gym`` adapts those)."""
 
     def params_from(self, given: dict[str, Any]) -> Any:
         """The params of this task with ``given`` fields changed from their defaults.

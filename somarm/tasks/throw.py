@@ -20,8 +20,7 @@ import math
 
 import numpy as np
 
-from somarm import ballistics
-from somarm.tasks import flight, launcher
+from somarm.tasks import ballistics, flight, launcher
 from somarm.tasks.base import OneStepEnvTask, OneStepTask, check_actions
 from somarm.tasks.record import TaskRecord
 

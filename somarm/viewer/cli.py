@@ -74,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"--port must be in 0..65535, got {args.port}")
         if args.html is not None and (not args.html or Path(args.html).is_dir()):
             raise ValueError(f"--html takes a file name, got {'a folder, ' if args.html else ''}{args.html!r}")
-        from somarm.run_config import parse_assignments
+        from somarm.run.config import parse_assignments
 
         task_set = parse_assignments(args.task_set, "--task-set")
         session = sessions.load_session(args.task, run=args.run, n_goals=args.goals, seed=args.seed,

@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 
-from somarm.progress import end_line
+from somarm.run.progress import end_line
 from somarm.validation import check_int, check_number
 from somarm.viewer.client import ViewerUnavailableWarning
 

@@ -1,0 +1,76 @@
+"""The learner registry: every learner kind, by name, and the one place that lists them.
+
+``make`` builds a learner of a kind and ``load`` reopens a saved one whatever its kind. A new
+kind is its own module (a config subclassing ``learner_base.ConfigBase`` and a learner
+subclassing ``learner_base.LearnerBase``) plus one line in ``LEARNERS``.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from somarm.learners.base import initial_generator, read_file
+from somarm.learners.motoric import MotoricConfig, MotoricMap
+from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.tabular import TabularConfig, TabularQ
+
+__all__ = ["LEARNERS", "KINDS", "config_class", "make", "load", "make_learner", "load_learner",
+           "initial_generator"]
+
+#: kind -> (config class, learner class)
+LEARNERS: dict[str, tuple[type, type]] = {
+    "somq": (SOMQConfig, SOMQ),
+    "motoric": (MotoricConfig, MotoricMap),
+    "tabular": (TabularConfig, TabularQ),
+}
+KINDS = tuple(LEARNERS)
+
+
+def _entry(kind: str) -> tuple[type, type]:
+    if kind not in LEARNERS:
+        raise ValueError(f"unknown learner kind {kind!r}; allowed: {', '.join(LEARNERS)}")
+    return LEARNERS[kind]
+
+
+def config_class(kind: str) -> type:
+    """The config class of learner ``kind``.
+
+    Raises:
+      ValueError: an unknown kind (the message lists the kinds).
+    """
+    return _entry(kind)[0]
+
+
+def make(kind: str, config: Any = None, **kwargs: Any):
+    """Build a learner by kind.
+
+    Args:
+      kind: one of ``KINDS``.
+      config: its config (default: the config class's defaults).
+      **kwargs: the learner's keywords (observation_low, ..., n_trials, seed, trial_ids).
+
+    Raises:
+      ValueError: an unknown kind (the message lists the kinds) or a config of the wrong class.
+    """
+    config_type, learner_type = _entry(kind)
+    config = config_type() if config is None else config
+    if not isinstance(config, config_type):
+        raise ValueError(f"a {kind} learner needs a {config_type.__name__}, got {type(config).__name__}")
+    return learner_type(config, **kwargs)
+
+
+def load(path: str | os.PathLike):
+    """Reopen a learner saved with ``save(path)``, whatever its kind.
+
+    Raises:
+      ValueError: the file is missing, damaged, or holds no known kind (the kinds are listed).
+    """
+    kind = read_file(path)[0]["kind"]
+    if kind not in LEARNERS:
+        raise ValueError(f"{path} holds no known learner kind; allowed: {', '.join(LEARNERS)}")
+    return LEARNERS[kind][1].load(path)
+
+
+make_learner = make  # the names before issue 8
+load_learner = load

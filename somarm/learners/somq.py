@@ -1,0 +1,253 @@
+"""SOM-Q (Smith 2002, section 4): an input SOM, an action SOM and a Q-table between them.
+
+Batched over independent trials: ``input_weights (n_trials, n_input_units, obs_dim)``,
+``action_weights (n_trials, n_action_units, action_dim)``, ``q (n_trials, n_input_units,
+n_action_units)``; one agent is ``n_trials == 1``. The learner knows only the observation and
+action boxes, observations, actions and rewards. Rules where the paper is brief:
+
+- t counts learning steps from 0; ``act`` and ``learn`` of one step read all seven schedules
+  at the same t, and ``learn`` advances it.
+- the perturbed action is a copy of the chosen unit's weights plus noise, clipped to the action
+  bounds (the algorithm's "keep inside"); bad observations and rewards are rejected, never clipped.
+- epsilon is in action units, as Table 1 reads literally; ``epsilon_relative=True`` reads it as a
+  fraction of each action range instead (the paper plots angles normalised to [0, 1], and with
+  that reading Table 1's 0.1 becomes 0.63 rad; which one the paper used is not stated).
+- ``periodic_actions=True`` treats the action dimensions the task declares periodic (its joint
+  angles: theta and theta + 2 pi are one pose) as circles: perturbed actions wrap round instead
+  of being clipped, and the action map moves along the shorter arc and wraps back into the box.
+  Off by default (the paper's box); it changes nothing where the task declares no periodic dimension.
+- delayed reward (gamma > 0): s'_j is the winner of the next observation before this step's
+  input-map update; terminal trials use the reward alone.
+- ``predict`` is greedy: the best Q for the winning input unit, ties to the lowest index, no
+  random number drawn and nothing learned.
+- random numbers: one row per step per trial, ``[explore?, random unit, tie-break, noise x
+  action_dim]`` (two per dimension for Gaussian noise, Box-Muller); the initial weights come
+  from a separate child stream of the trial's learner seed (``learners.initial_generator``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from somarm.learners import _kernels, interpolation
+from somarm.learners.base import ConfigBase, LearnerBase, validate_common
+from somarm.learners.schedules import InverseDecay, Schedule
+from somarm.learners.som import winners
+
+__all__ = ["RESPONSES", "SOMQConfig", "SOMQ", "row_width"]
+
+#: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
+RESPONSES = ("winner", "interpolated")
+
+_F1 = InverseDecay(1000.0)
+
+
+@dataclass(frozen=True)
+class SOMQConfig(ConfigBase):
+    """Everything that defines a SOM-Q learner; the defaults are Table 1's numbers (reach2, Fig. 7).
+
+    ``somarm.learners.presets.get("table1")`` is the full Table 1 (it also starts the input weights in
+    [0, 1]). A plain number given for a schedule is taken as a constant schedule.
+    """
+
+    input_shape: tuple[int, ...] = (50,)
+    """Input map grid: ``(n,)`` for a line or ``(rows, cols)`` for a rectangle."""
+    action_shape: tuple[int, ...] = (50,)
+    """Action map grid, as ``input_shape``."""
+    alpha: Schedule = Schedule(1.0, _F1)
+    """Q-learning rate."""
+    lambda_s: Schedule = Schedule(1.0, _F1)
+    """Learning rate of the input map."""
+    lambda_a: Schedule = Schedule(1.0, _F1)
+    """Learning rate of the action map."""
+    n_s: Schedule = Schedule(20.0, _F1)
+    """Input map neighbourhood size N_S (grid units; 0 = the winner alone)."""
+    n_a: Schedule = Schedule(20.0, _F1)
+    """Action map neighbourhood size N_A."""
+    p: Schedule = Schedule(1.0, _F1)
+    """Probability of choosing a random action unit (Q-learning exploration), in [0, 1]."""
+    epsilon: Schedule = Schedule(0.1, _F1)
+    """Largest perturbation of each action element (the standard deviation for Gaussian noise)."""
+    gamma: float = 0.0
+    """Discount in [0, 1]; 0 is the immediate reward of all the paper's experiments."""
+    neighbourhood_q: bool = True
+    """Neighbourhood Q-learning (+NL); False updates only the winning pair (-NL)."""
+    noise: Literal["uniform", "gaussian"] = "uniform"
+    """Perturbation: ``uniform`` random(-1, 1) x epsilon (the paper's), or ``gaussian`` N(0, 1) x epsilon."""
+    epsilon_relative: bool = False
+    """Read epsilon as a fraction of each action dimension's range (high - low) instead of in action units."""
+    input_init: tuple[float, float] | None = None
+    """Range of the initial input weights in every dimension; None = the observation bounds."""
+    response: Literal["winner", "interpolated"] = "winner"
+    """Greedy response: ``winner`` (the paper's: the best action unit of the winning input unit) or
+    ``interpolated`` (a blend over the nearest input units' greedy actions; ``somarm.learners.interpolation``)."""
+
+    periodic_actions: bool = False
+    """Treat the action dimensions the task declares periodic (joint angles) as circles: wrap round
+    instead of clipping, and move the action map along the shorter arc (False: the paper's box)."""
+
+    SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
+
+    def __post_init__(self) -> None:
+        validate_common(self, probabilities=("p",))
+        if self.response not in RESPONSES:
+            raise ValueError(f"response must be one of {', '.join(RESPONSES)}, got {self.response!r}")
+
+
+def row_width(config: SOMQConfig, action_dim: int) -> int:
+    """Random numbers per step per trial: explore?, random unit, tie-break, then the noise."""
+    return 3 + action_dim * (2 if config.noise == "gaussian" else 1)
+
+
+class SOMQ(LearnerBase):
+    """SOM-Q for ``n_trials`` independent trials (conforms to ``somarm.protocols.Learner``).
+
+    Args:
+      config: a ``SOMQConfig``.
+      observation_low, observation_high: the observation box, ``(obs_dim,)`` each.
+      action_low, action_high: the action box, ``(action_dim,)`` each; low < high.
+      n_trials: independent trials advanced together (>= 1).
+      seed: the run's seed; trial i's numbers depend only on (seed, trial_ids[i]).
+      trial_ids: which trials of the run these are (default ``range(n_trials)``); ``[7]``
+        replays trial 7 of a batch alone.
+      action_periodic: which action dimensions are angles whose low and high are one point,
+        ``(action_dim,)`` bools (default none); wrapped only with ``config.periodic_actions``.
+
+    Raises:
+      ValueError: a bad config, bounds, ``n_trials``, ``seed`` or ``trial_ids`` (one line).
+    """
+
+    kind = "somq"
+    config_class = SOMQConfig
+
+    def _build(self) -> None:
+        cfg = self.config
+        self.action_grid, self._distances_a = self._grid(cfg.action_shape)
+        n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
+        self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
+        for trial, rng in enumerate(self._initial_generators()):
+            # Table 1 order: input weights first, then action weights, from one child stream.
+            self.input_weights[trial] = self._initial_input_weights(rng)
+            span = self.action_high - self.action_low
+            self.action_weights[trial] = self.action_low + span * rng.random((n_a, self.action_dim))
+        self.q = np.zeros((self.n_trials, n_s, n_a))
+        self._open_streams(row_width(cfg, self.action_dim))
+        self._interpolated = cfg.response == "interpolated"
+        self._wrap = self.action_periodic & cfg.periodic_actions  # all False: the paper's clipped box
+        self._n_basis = interpolation.n_basis_for(cfg.input_shape)
+        # With the interpolated response ``_actions`` holds step 7's corrected targets, these the output.
+        self._outputs = np.zeros((self.n_trials, self.action_dim))
+        self._shifted = np.zeros(self.n_trials, dtype=np.bool_)  # stays all False for the winner response
+
+    @property
+    def periodic_dimensions(self) -> np.ndarray:
+        """The action dimensions this learner wraps round (``periodic_actions`` and the task's declaration)."""
+        return self._wrap.copy()
+
+    _STATE_ARRAYS = ("input_weights", "action_weights", "q")
+    # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
+    _PENDING_ARRAYS = LearnerBase._PENDING_ARRAYS + ("_shifted",)
+    # Files saved before ``_shifted`` existed load with it all False: nothing shifts (the winner response).
+    _OPTIONAL_ARRAYS = ("_shifted",)
+
+    def act(self, observations) -> np.ndarray:
+        """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
+
+        Args:
+          observations: ``(n_trials, obs_dim)``, finite.
+
+        Returns:
+          Perturbed actions ``(n_trials, action_dim)`` inside the action bounds (a fresh array;
+          wrapped round, not clipped, in the periodic dimensions with ``periodic_actions``).
+
+        Raises:
+          ValueError: wrong shape, NaN or inf; or the previous act() still waits for its learn().
+        """
+        self._check_not_pending()
+        x = self._check_observations(observations, finite=False)
+        if not _kernels.all_finite(x):  # before a random row is used
+            raise ValueError("observations must be finite, got NaN or inf")
+        rows = self._streams.next()
+        values = self._current()
+        self._observations[...] = x
+        if self._interpolated:
+            interpolation.act_kernel(
+                self._observations, self.input_weights, self.action_weights, self.q, rows, values["p"],
+                self._epsilons(values["epsilon"]), self.action_low, self.action_high, self._wrap,
+                self.config.noise == "gaussian", self._distances_a, self._n_basis, self._winners,
+                self._units, self._outputs, self._actions, self._shifted,
+            )
+            self._pending = True
+            return self._outputs.copy()
+        _kernels.act_kernel(
+            self._observations, self.input_weights, self.action_weights, self.q, rows,
+            values["p"], self._epsilons(values["epsilon"]), self.action_low, self.action_high, self._wrap,
+            self.config.noise == "gaussian", self._winners, self._units, self._actions,
+        )
+        self._pending = True
+        return self._actions.copy()
+
+    def learn(self, rewards, next_observations=None, terminal: bool | np.ndarray = True) -> None:
+        """Steps 6 to 10 for the rewards that followed the last ``act``.
+
+        Args:
+          rewards: ``(n_trials,)``, finite.
+          next_observations: ``(n_trials, obs_dim)``; needed when gamma > 0 and a trial is not terminal.
+          terminal: bool, or ``(n_trials,)`` bools; terminal trials do not bootstrap.
+
+        Raises:
+          ValueError: no ``act`` before, bad shapes, NaN or inf, or a missing ``next_observations``.
+        """
+        r, bootstrap, x_next = self._check_learn(rewards, next_observations, terminal, finite=False)
+        if not _kernels.all_finite(r):
+            raise ValueError("rewards must be finite, got NaN or inf")
+        if x_next is not self._observations and not _kernels.all_finite(x_next):
+            raise ValueError("next_observations must be finite, got NaN or inf")
+        values = self._current()
+        _kernels.learn_kernel(
+            r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
+            self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
+            values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
+            self._distances_s, self._distances_a, self.config.neighbourhood_q, self._shifted,
+            self.action_low, self.action_high, self._wrap,
+        )
+        self._pending = False
+        self.t += 1
+
+    def greedy_units(self, observations) -> tuple[np.ndarray, np.ndarray]:
+        """The winning input unit and its best action unit (ties to the lowest index).
+
+        Args:
+          observations: ``(n_trials, obs_dim)`` or ``(n_trials, n_obs, obs_dim)``.
+
+        Returns:
+          ``(input_winners, action_units)``, each of the leading shape of ``observations``.
+        """
+        x = self._check_observations(observations, allow_many=True)
+        input_winners = winners(self.input_weights, x)
+        index = np.arange(self.n_trials).reshape((-1,) + (1,) * (input_winners.ndim - 1))
+        return input_winners, np.argmax(self.q[index, input_winners], axis=-1)
+
+    def predict(self, observations) -> np.ndarray:
+        """Greedy actions, no exploration, no learning, no random number drawn.
+
+        Args:
+          observations: ``(n_trials, obs_dim)`` or ``(n_trials, n_obs, obs_dim)``.
+
+        Returns:
+          ``(n_trials, action_dim)`` or ``(n_trials, n_obs, action_dim)``.
+        """
+        if self._interpolated:
+            x = self._check_observations(observations, allow_many=True)
+            many = x.reshape(self.n_trials, -1, self.obs_dim)
+            out = np.empty((self.n_trials, many.shape[1], self.action_dim))
+            interpolation.predict_kernel(np.ascontiguousarray(many), self.input_weights, self.action_weights,
+                                         self.q, self._distances_a, self._n_basis, self.action_low,
+                                         self.action_high, self._wrap, out)
+            return out.reshape(x.shape[:-1] + (self.action_dim,))
+        _, units = self.greedy_units(observations)
+        index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))
+        return self.action_weights[index, units]

@@ -1,0 +1,41 @@
+"""A training run: its settings, building, training, summary and folder.
+
+``RunConfig`` (``somarm.run.config``) is the single source of a run's settings: the ``somarm
+train`` options, their defaults and help are derived from its fields (as CleanRL derives its
+command line from a dataclass), and it is saved as ``config.json``. ``train``/``train_group``
+(``somarm.run.group``) build the task and the learners once (``somarm.run.build``) and hand them
+to the loop in ``somarm.run.loop``; ``write`` and ``load`` (``somarm.run.folder``) own the run
+folder::
+
+    result = run.train(RunConfig(task="reach2", n_trials=20))
+    run.write(result, "runs/reach2", extra_summary=run.greedy_summary(result))
+"""
+
+from somarm.run.build import check_memory_needs, make, make_learner, make_task
+from somarm.run.config import RunConfig, add_options, from_options, parse_assignments
+from somarm.run.folder import load, task_for, write
+from somarm.run.group import RunGroup, RunResult, share_lanes, train, train_group
+from somarm.run.loop import final_rewards
+from somarm.run.summary import greedy_summary, summary
+
+__all__ = [
+    "RunConfig",
+    "RunResult",
+    "add_options",
+    "from_options",
+    "parse_assignments",
+    "make_task",
+    "share_lanes",
+    "make_learner",
+    "make",
+    "check_memory_needs",
+    "train",
+    "train_group",
+    "RunGroup",
+    "greedy_summary",
+    "summary",
+    "write",
+    "load",
+    "task_for",
+    "final_rewards",
+]

@@ -1,0 +1,25 @@
+"""Shared by the reference-equality tests (not collected): bounds, a small annealing config, the circle arc."""
+
+import numpy as np
+
+from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
+from somarm.learners.somq import SOMQConfig
+
+BOUNDS = dict(observation_low=[0.0, -1.0], observation_high=[1.0, 1.0], action_low=[-1.0, 0.0, -2.0],
+              action_high=[1.0, 1.0, 2.0])
+
+
+def small_config(input_shape, neighbourhood_q, gamma, noise="uniform", **changes) -> SOMQConfig:
+    """A 7-unit action map whose schedules anneal within a test, so late, narrow-neighbourhood steps are covered."""
+    fast = InverseDecay(50.0)
+    return SOMQConfig(
+        input_shape=input_shape, action_shape=(7,), alpha=Schedule(0.9, fast), lambda_s=Schedule(0.8, fast),
+        lambda_a=Schedule(0.7, fast, floor=0.05), n_s=Schedule(3.0, fast), n_a=Schedule(2.5, fast),
+        p=Schedule(0.6, fast), epsilon=Schedule(0.4, ExponentialDecay(0.99), floor=0.01), gamma=gamma,
+        neighbourhood_q=neighbourhood_q, noise=noise, **changes,
+    )
+
+
+def arc(difference, period):
+    """An independent (NumPy) statement of the shorter way round a circle, to check the kernels with."""
+    return difference - period * np.floor(difference / period + 0.5)

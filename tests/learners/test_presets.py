@@ -1,0 +1,108 @@
+import dataclasses
+
+import numpy as np
+import pytest
+
+from somarm.learners import presets
+from somarm.learners.motoric import MotoricConfig
+from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
+from somarm.learners.somq import SOMQConfig
+
+NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table5+"]
+
+
+def test_every_table_is_available_by_name_with_a_description():
+    assert list(presets.PRESETS) == [*NAMES, "obstacle"]
+    for name in NAMES:
+        assert isinstance(presets.get(name), SOMQConfig)
+        line = presets.describe(name)
+        assert line.startswith("Table") and "\n" not in line and "Fig" in line
+        assert presets.PRESETS[name].config is presets.get(name)
+
+
+def test_plus_presets_change_only_schedules_of_their_table_and_table1_plus_the_circles():
+    for name, changed in (("table1+", {"lambda_a", "periodic_actions"}), ("table5+", set(SOMQConfig.SCHEDULES))):
+        base, plus = presets.get(name[:-1]).to_dict(), presets.get(name).to_dict()
+        assert {key for key in base if base[key] != plus[key]} == changed
+        assert plus["response"] == "winner"
+    assert presets.get("table1+").lambda_a.value(10**6) == 0.1 and presets.get("table1+").periodic_actions
+    assert any("periodic_actions" in choice for choice in presets.PRESETS["table1+"].choices)
+    assert presets.get("table5+").epsilon.value(10**6) == 0.02
+
+
+def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
+    preset = presets.PRESETS["obstacle"]
+    assert preset.task == "reach2_obstacle" and preset.config.gamma == 0.9
+    assert preset.config.input_shape == (12, 12) and preset.config.action_shape == (3, 3)
+    assert presets.describe("obstacle").startswith("beyond the paper")
+    assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
+
+
+def test_table1_values():
+    c, f = presets.get("table1"), InverseDecay(1000)
+    assert c.input_shape == (50,) and c.action_shape == (50,) and c.input_init == (0.0, 1.0)
+    assert (c.n_s, c.n_a, c.epsilon) == (Schedule(20, f), Schedule(20, f), Schedule(0.1, f))
+    assert c.alpha == c.lambda_s == c.lambda_a == c.p == Schedule(1, f)
+    assert c.gamma == 0 and c.neighbourhood_q
+
+
+def test_table2_values_and_floors():
+    c, f = presets.get("table2"), InverseDecay(500)
+    assert c.input_shape == (10, 10) and c.action_shape == (8,)
+    assert c.alpha == Schedule(1, f, 0.1) and c.lambda_a == Schedule(1, f, 0.1)
+    assert c.epsilon == Schedule(0.1, f, 0.01) and c.p == Schedule(0.25, f)
+    assert c.n_s == Schedule(10, f) and c.n_a == Schedule(3, f)
+    assert c.epsilon.value(10**6) == 0.01  # the floor keeps residual exploration after the change
+
+
+def test_table4_and_table5_relation():
+    t4, t5 = presets.get("table4"), presets.get("table5")
+    assert t4.input_shape == (1,) and t4.action_shape == (30,)
+    assert t4.n_a == Schedule(15, ExponentialDecay(0.999), 2) and t4.p.floor == 0.5 and t4.alpha.floor == 0.05
+    assert presets.PRESETS["table4"].n_steps == 4000
+    f = ExponentialDecay(0.9985)
+    assert t5.input_shape == (30,) and t5.action_shape == t4.action_shape
+    assert (t5.n_s, t5.n_a, t5.lambda_s) == (Schedule(15, f), Schedule(25, f), Schedule(0.3, f))
+    # "Minimum values are no longer used": no floor anywhere, everything on f = 0.9985^throw.
+    assert all(getattr(t5, n).floor == 0 and getattr(t5, n).decay == f for n in SOMQConfig.SCHEDULES)
+
+
+def test_table7_and_experiment_a():
+    t7, t7a = presets.get("table7"), presets.get("table7a")
+    assert t7.input_shape == (10, 10) and t7.action_shape == (30,)
+    assert t7.n_s == t7.n_a == Schedule(7, ExponentialDecay(0.9997))
+    assert t7a.input_shape == (30,) and t7a.n_s == Schedule(7, ExponentialDecay(0.9985))
+    # Experiment A differs only in its input map and in f.
+    faster = {n: getattr(t7, n).with_changes(decay=ExponentialDecay(0.9985)) for n in SOMQConfig.SCHEDULES}
+    assert dataclasses.replace(t7, input_shape=(30,), **faster) == t7a
+    assert presets.PRESETS["table7"].n_trials == 100
+
+
+def test_motoric_preset_matches_table2():
+    m, t2 = presets.get_motoric("table2"), presets.get("table2")
+    assert isinstance(m, MotoricConfig)
+    assert m.input_shape == t2.input_shape and m.alpha == t2.alpha and m.epsilon == t2.epsilon
+    assert m.lambda_a == t2.lambda_a and m.n_a == t2.n_a and m.input_init == (0.0, 1.0)
+    assert dataclasses.replace(MotoricConfig(), input_init=(0.0, 1.0), epsilon_relative=True) == m
+    assert presets.config_for("motoric", "table2") == m and presets.config_for("somq", "table2") == t2
+
+
+def test_unknown_names_list_the_allowed():
+    with pytest.raises(ValueError, match="unknown preset 'table3'; allowed: table1, table2, table4"):
+        presets.get("table3")
+    with pytest.raises(ValueError, match="allowed: table1"):
+        presets.get_motoric("fig13")
+    with pytest.raises(ValueError, match="allowed: somq, motoric"):
+        presets.config_for("dqn", "table1")
+
+
+def test_presets_build_learners():
+    from somarm.learners import make_learner
+
+    for name in NAMES:
+        for kind in ("somq", "motoric"):
+            learner = make_learner(kind, presets.config_for(kind, name), observation_low=[0, 0],
+                                   observation_high=[1, 1], action_low=[0, 0], action_high=[1, 1], n_trials=2)
+            actions = learner.act(np.full((2, 2), 0.5))
+            learner.learn(-actions.sum(axis=1))
+            assert learner.t == 1

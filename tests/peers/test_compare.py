@@ -1,0 +1,85 @@
+"""``somarm compare`` and the reproduce part ``peers``: tiny budgets, every learner (TD3 and SAC too)."""
+
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from somarm.cli import main
+from somarm.peers import compare
+from somarm.reproduce import runner
+
+if compare.peers_missing():  # the peers extra (with CI=true, conftest turns this skip into a failure)
+    pytest.skip(compare.peers_missing(), allow_module_level=True)
+
+
+def test_the_ladder_is_1_2_5_below_the_budget_then_the_budget():
+    assert compare.ladder(1200) == [100, 200, 500, 1000, 1200]
+    assert compare.ladder(1000) == [100, 200, 500, 1000]
+    assert compare.ladder(50) == [50]
+
+
+def test_compare_smoke_every_learner_writes_json_and_png(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    code = main(["compare", "throw_distance", "--samples", "150", "--peer-samples", "110", "--seeds", "2",
+                 "--observations", "50", "--out", str(out), "--no-progress"])
+    assert code == 0, capsys.readouterr().err
+    result = json.loads((out / "compare.json").read_text())
+    assert result["complete"] and result["seeds"] == [0, 1] and sorted(result["learners"]) == sorted(compare.LEARNERS)
+    assert 0 < result["random_action_error"] < 10
+    for kind, data in result["learners"].items():
+        assert data["samples"] == ([100, 110] if kind in compare.PEERS else [100, 150])
+        errors, walls = np.array(data["error"]), np.array(data["wall_seconds"])
+        assert errors.shape == walls.shape == (2, 2)
+        assert np.isfinite(errors).all() and (errors >= 0).all()
+        assert (np.diff(walls, axis=0) >= 0).all() and (walls > 0).all()
+        assert len(data["seconds_per_sample"]) == 2 and data["settings"]
+    assert "learning_rate" in result["learners"]["td3"]["settings"]
+    assert result["learners"]["sac"]["settings"]["torch_threads"] == 1
+    assert result["learners"]["somq"]["settings"]["input_shape"] == [30]  # table5, the task's preset
+    assert (out / "compare.png").stat().st_size > 10_000
+
+
+def test_the_same_seed_gives_the_same_errors_for_somarm_learners(tmp_path):
+    config = compare.CompareConfig(task="reach2", learners=("somq", "tabular"), samples=120, seeds=1,
+                                   observations=30)
+    first = compare.compare(config, tmp_path / "a", progress=False)
+    second = compare.compare(config, tmp_path / "b", progress=False)
+    for kind in config.learners:
+        assert first["learners"][kind]["error"] == second["learners"][kind]["error"]
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, motoric, tabular, td3, sac"),
+    (["reach20", "--learners", "tabular"], "tabular cannot learn reach20"),
+    (["reach3"], "unknown task 'reach3'"),
+    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes the one-step tasks"),
+    (["reach2", "--seeds", "0"], "seeds must be a whole number >= 1"),
+])
+def test_bad_compare_arguments_end_in_one_line(argv, message, capsys, tmp_path):
+    assert main(["compare", *argv, "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("somarm: error: ") and message in err
+    assert not (tmp_path / "x").exists()
+
+
+def test_without_the_extra_td3_names_the_missing_extra(monkeypatch, capsys, tmp_path):
+    monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # import fails as if not installed
+    assert main(["compare", "reach2", "--learners", "somq,td3", "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert "optional extra 'peers'" in err and 'pip install -e ".[peers]"' in err and err.count("\n") == 1
+    assert main(["reproduce", "--only", "peers", "--out", str(tmp_path / "y")]) == 2
+    assert "optional extra 'peers'" in capsys.readouterr().err
+
+
+def test_the_peers_part_is_optional_and_runs_when_named(tmp_path):
+    assert "peers" not in runner.EXPERIMENTS and runner.check_names(["peers"]) == ["peers"]
+    assert runner.reproduce(tmp_path, quick=True, only=["peers"], progress=False) == 0
+    claims = runner.load_claims(tmp_path)["experiments"]["peers"]["claims"]
+    assert len(claims) == 2 and all(c["holds"] in (True, False) for c in claims)
+    report = (tmp_path / "REPORT.md").read_text()
+    assert "| samples | SOM-Q | Motoric Map | tabular (fixed grid) | SB3 TD3 | SB3 SAC |" in report
+    for task in ("reach2", "reach20", "throw_distance"):
+        assert (tmp_path / "peers" / task / "compare.png").stat().st_size > 10_000
+        assert f"![compare](peers/{task}/compare.png)" in report

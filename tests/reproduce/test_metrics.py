@@ -1,0 +1,61 @@
+import numpy as np
+import pytest
+
+from somarm.reproduce import metrics
+
+LINE5 = np.column_stack([np.arange(5), np.zeros(5)])
+
+
+def test_grid_distances_chebyshev():
+    grid = np.array([[0, 0], [0, 1], [1, 1], [2, 3]])
+    d = metrics.chebyshev_distances(grid)
+    assert d[0, 2] == 1 and d[0, 3] == 3 and d[1, 3] == 2
+    np.testing.assert_array_equal(d, d.T)
+
+
+def test_topographic_error_ordered_and_twisted_maps():
+    ordered = np.linspace(0, 1, 5)[:, None]
+    samples = np.linspace(0, 1, 101)[:, None]
+    assert metrics.topographic_error(ordered, LINE5, samples) == 0.0
+    twisted = ordered[[0, 3, 2, 1, 4]]
+    assert metrics.topographic_error(twisted, LINE5, samples) > 0.3
+
+
+def test_nearest_is_neighbour():
+    ordered = np.linspace(0, 1, 5)[:, None]
+    assert metrics.nearest_is_neighbour(ordered, LINE5) == 1.0
+    shuffled = ordered[[0, 2, 4, 1, 3]]
+    assert metrics.nearest_is_neighbour(shuffled, LINE5) == 0.0
+
+
+def test_greedy_jumps_counts_neighbour_pairs():
+    jumps = metrics.greedy_jumps(np.array([0, 1, 1, 4, 3]), LINE5, LINE5)
+    np.testing.assert_array_equal(jumps, [1, 0, 3, 1])
+
+
+def test_distance_to_polyline_and_nan_split():
+    line = np.array([[0.0, 0.0], [1.0, 0.0], [np.nan, np.nan], [1.0, 1.0], [2.0, 1.0]])
+    points = np.array([[0.5, 0.5], [1.5, 1.0], [3.0, 1.0]])
+    np.testing.assert_allclose(metrics.distance_to_polyline(points, line), [0.5, 0.0, 1.0])
+
+
+def test_spacing_cv_equal_and_unequal():
+    assert metrics.spacing_cv([0, 1, 2, 3]) == pytest.approx(0.0)
+    assert metrics.spacing_cv([0, 1, 3, 7]) > 0.5
+
+
+def test_steps_to_level_and_spearman():
+    steps = np.array([100, 200, 300, 400])
+    assert metrics.steps_to_level(steps, np.array([3.0, 2.0, 0.5, 0.4]), 1.0) == 300
+    assert np.isnan(metrics.steps_to_level(steps, np.array([3.0, 2.0, 2.0, 2.0]), 1.0))
+    assert metrics.spearman(np.arange(10), np.arange(10) ** 2) == pytest.approx(1.0)
+    assert metrics.spearman(np.arange(10), -np.arange(10.0)) == pytest.approx(-1.0)
+
+
+def test_centred_mean_does_not_lag():
+    step = np.r_[np.ones(10), np.zeros(10)][:, None]
+    centred = metrics.centred_mean(step, 2)[:, 0]
+    np.testing.assert_allclose(centred[:8], 1.0)
+    assert centred[9] == pytest.approx(0.6) and centred[10] == pytest.approx(0.4)
+    np.testing.assert_allclose(centred[12:], 0.0)
+    np.testing.assert_allclose(metrics.centred_mean(np.arange(5.0), 1), [0.5, 1, 2, 3, 3.5])

@@ -1,0 +1,56 @@
+"""The progress display: redrawn in place on a terminal, whole lines (no carriage returns) in a log."""
+
+import io
+
+from somarm.run.progress import Progress
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_log_gets_a_line_per_tenth_and_the_last_line_once():
+    log = io.StringIO()
+    bar = Progress(1000, label="reach2/somq", stream=log, rate_hz=1e9)
+    for step in range(100, 1001, 100):
+        bar.update(step, -0.5)
+    bar.close(1000, -0.5)
+    text = log.getvalue()
+    assert "\r" not in text
+    lines = text.splitlines()
+    assert [line.split("] ")[1].split()[0] for line in lines] == [f"{s}/1000" for s in range(100, 1001, 100)]
+
+
+def test_a_log_is_short_even_with_many_updates():
+    log = io.StringIO()
+    bar = Progress(100_000, stream=log, rate_hz=1e9)
+    for step in range(1, 100_001, 10):
+        bar.update(step, 0.0)
+    bar.close(100_000, 0.0)
+    assert len(log.getvalue().splitlines()) <= 12  # the first, one per tenth, the last
+
+
+def test_a_terminal_redraws_in_place_and_ends_the_line_once():
+    tty = _Terminal()
+    bar = Progress(10, stream=tty, rate_hz=1e9)
+    for step in range(1, 11):
+        bar.update(step, 0.0)
+    bar.close(10, 0.0)
+    text = tty.getvalue()
+    assert text.count("\r") == 10 and text.endswith("\n") and text.count("\n") == 1
+
+
+def test_a_message_after_an_open_bar_starts_on_its_own_line():
+    from somarm.run.progress import end_line
+
+    tty = _Terminal()
+    bar = Progress(10, stream=tty, rate_hz=1e9)
+    bar.update(5, 0.0)
+    end_line()  # what the viewer does before it warns
+    tty.write("warning\n")
+    bar.update(10, 0.0)
+    bar.close(10, 0.0)
+    lines = tty.getvalue().split("\n")
+    assert lines[1] == "warning" and lines[0].startswith("\r") and lines[2].startswith("\r")
+    assert tty.getvalue().endswith("\n") and not tty.getvalue().endswith("\n\n")

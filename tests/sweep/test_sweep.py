@@ -1,0 +1,171 @@
+"""``somarm sweep`` on the local engine: specs, lockstep equals separate runs, resume, failures."""
+
+import csv
+import json
+import signal
+
+import numpy as np
+import pytest
+
+from somarm import cli, run
+from somarm.run import group
+from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
+from somarm.sweep.spec import preset_value
+from somarm.sweep.work import plan_chunks
+
+TINY = ["--trials", "2", "--steps", "200", "--block", "50", "--no-progress"]
+
+
+def read_csv(path):
+    with open(path) as handle:
+        return list(csv.DictReader(handle))
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        ["--grid", "alpha"],
+        ["--grid", "alpha="],
+        ["--grid", "alpha=0.5,,1"],
+        ["--grid", "alpha=0.5,0.5"],
+        ["--grid", "=0.5,1"],
+        ["--grid", "alfa=0.5,1"],
+        ["--grid", "alpha=0.5,2"],
+        ["--grid", "task.radius=0.25,0.9"],
+        ["--grid", "task.nope=1,2"],
+        ["--grid", "alpha=0.5,1", "--grid", "alpha=0.1,0.2"],
+        ["--grid", "alpha=0.5,1", "--set", "alpha=0.3"],
+        ["--random", "alpha=0.1", "--samples", "2"],
+        ["--random", "alpha=0.9:0.1", "--samples", "2"],
+        ["--random", "alpha=0:1:log", "--samples", "2"],
+        ["--random", "alpha=0.1:1:lin", "--samples", "2"],
+        ["--random", "alpha=0.1:1"],
+        ["--grid", "alpha=0.5,1", "--samples", "3"],
+        ["--grid", "alpha=0.5,1", "--seeds", "0"],
+        ["--grid", "alpha=0.5,1", "--engine", "dask"],
+        ["--grid", "alpha=0.5,1", "--address", "127.0.0.1:6379"],
+        ["--grid", "alpha=0.5,1", "--trial-ids", "3"],
+        [],
+    ],
+)
+def test_a_bad_sweep_spec_ends_in_one_line_before_anything_is_written(options, tmp_path, capsys):
+    out = tmp_path / "sweep"
+    assert cli.main(["sweep", "reach2", *options, "--out", str(out), *TINY]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("somarm: error: ") and err.count("\n") == 1, err
+    assert not out.exists()
+
+
+def test_grid_and_random_axes_give_every_combination_with_reproducible_draws():
+    spec = SweepSpec(
+        task="reach2",
+        axes=(parse_grid("decay=inv:500,inv:1000"), parse_random("alpha=0.1:1:log"), parse_random("task.radius=1:3")),
+        n_samples=3,
+    )
+    points = spec.points()
+    assert len(points) == 6 and points == spec.points()  # 2 grid values x 3 draws, the same each time
+    assert [p["decay"] for p in points] == ["inv:500"] * 3 + ["inv:1000"] * 3
+    alphas = np.array([float(p["alpha"]) for p in points])
+    assert ((alphas >= 0.1) & (alphas <= 1)).all() and len(set(alphas[:3])) == 3
+    assert all(p["task.radius"] in ("1", "2", "3") for p in points)  # whole-number bounds draw whole numbers
+    assert preset_value(spec.check(), "decay") == "inv:1000" and preset_value(spec.check(), "alpha") == "1"
+    assert preset_value(spec.check(), "task.radius") == "0.25"
+
+
+def test_points_sharing_a_task_and_seed_train_in_one_group_cut_only_for_memory():
+    spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,1"), parse_grid("task.radius=0.2,0.25")),
+                     n_seeds=2).check()
+    items = [(i, s, spec.config(p, s)) for i, p in enumerate(spec.points()) for s in range(2)]
+    chunks = plan_chunks(items)
+    assert len(chunks) == 4  # 2 task parameter sets x 2 seeds, each with both alphas
+    for chunk in chunks:
+        assert len({(c.seed, c.task_params["radius"]) for _, _, c in chunk.items}) == 1
+        assert sorted(c.overrides["alpha"] for _, _, c in chunk.items) == ["0.5", "1"]
+    assert len(plan_chunks(items, max_bytes=1.0)) == 8  # too big for one group: one point each
+
+
+def test_a_local_sweep_equals_separate_runs_bit_for_bit(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    argv = ["sweep", "reach2", "--grid", "alpha=0.5,1", "--grid", "task.radius=0.2,0.25", "--seeds", "2"]
+    assert cli.main([*argv, "--out", str(out), *TINY]) == 0
+    summary = capsys.readouterr().out
+    rows = read_csv(out / "results.csv")
+    assert len(rows) == 8 and {"alpha", "task.radius", "seed", "greedy_error", "final_error"} <= set(rows[0])
+    best = json.loads((out / "best.json").read_text())
+    assert f"best alpha={best['values']['alpha']} task.radius={best['values']['task.radius']}" in summary
+    assert "preset table1 has alpha=1" in summary and "task.radius=0.25" in summary.split("preset")[1]
+    for row in (rows[1], rows[6]):  # one point of each task and seed, run alone through `somarm train`
+        run = tmp_path / f"run{row['point']}_{row['seed']}"
+        train = ["train", "reach2", "--set", f"alpha={row['alpha']}", "--task-set", f"radius={row['task.radius']}",
+                 "--seed", row["seed"], "--out", str(run), "--no-figures", *TINY]
+        assert cli.main(train) == 0
+        alone = json.loads((run / "summary.json").read_text())
+        assert -float(row["greedy_error"]) == alone["greedy_mean_reward"]
+        assert -float(row["final_error"]) == alone["final_mean_reward"]
+    # best.json's command reruns the best point as it was swept
+    command = best["command"].split()
+    assert command[:3] == ["somarm", "train", "reach2"] and f"alpha={best['values']['alpha']}" in command
+
+
+def test_an_interrupted_sweep_keeps_its_rows_and_a_rerun_finishes_only_the_rest(tmp_path, monkeypatch):
+    spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,1"),), n_trials=2, n_steps=200, block=50,
+                     n_seeds=3)
+    real = run.train_group
+    calls = []
+
+    def ctrl_c_in_second_group(configs, **kwargs):
+        calls.append(len(configs))
+
+        def hook(step, *arrays):
+            if len(calls) == 2 and step == 20:
+                signal.raise_signal(signal.SIGINT)  # as Ctrl-C: the run stops after this step
+
+        return real(configs, **{**kwargs, "on_step": hook})
+
+    monkeypatch.setattr(run, "train_group", ctrl_c_in_second_group)
+    out = tmp_path / "sweep"
+    first = run_sweep(spec, out, progress=False, figure=False)
+    assert first.interrupted and calls == [2, 2]
+    rows = read_csv(out / "results.csv")
+    assert [(r["point"], r["seed"]) for r in rows] == [("0", "0"), ("1", "0")]  # seed 0 only, both complete
+    assert "no point finished every seed (2 of 6 runs done)" in first.summary
+    assert not (out / "best.json").exists()  # no best until some point has every seed
+    kept = {p.name: p.read_bytes() for p in (out / "points").iterdir()}
+
+    second = run_sweep(spec, out, progress=False, figure=False)
+    assert not second.interrupted and second.n_run == 4 and calls == [2, 2, 2, 2]  # seeds 1 and 2 only
+    assert all((out / "points" / name).read_bytes() == data for name, data in kept.items())
+    assert len(read_csv(out / "results.csv")) == 6 and json.loads((out / "best.json").read_text())["seeds"] == 3
+    assert run_sweep(spec, out, progress=False, figure=False).n_run == 0
+
+
+def test_a_failing_point_is_recorded_with_its_error_and_the_others_finish(tmp_path, monkeypatch):
+    spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,0.7,1"),), n_trials=2, n_steps=200, block=50)
+    real = run.make_learner
+
+    def broken_for_alpha_07(config, task):
+        if config.overrides.get("alpha") == "0.7":
+            raise FloatingPointError("the learner diverged")
+        return real(config, task)
+
+    monkeypatch.setattr(group, "make_learner", broken_for_alpha_07)  # where RunGroup builds
+    out = tmp_path / "sweep"
+    outcome = run_sweep(spec, out, progress=False, figure=False)
+    rows = {r["alpha"]: r for r in read_csv(out / "results.csv")}
+    assert rows["0.7"]["error"] == "FloatingPointError: the learner diverged" and rows["0.7"]["greedy_error"] == ""
+    assert all(np.isfinite(float(rows[a]["greedy_error"])) and not rows[a]["error"] for a in ("0.5", "1"))
+    assert json.loads((out / "best.json").read_text())["values"]["alpha"] in ("0.5", "1")
+    assert not outcome.interrupted and "3 of 3 runs done" in outcome.summary
+
+    monkeypatch.setattr(group, "make_learner", real)
+    again = run_sweep(spec, out, progress=False, figure=False)
+    assert again.n_run == 1 and not read_csv(out / "results.csv")[1]["error"]  # the failed point is retried
+
+
+def test_importing_the_sweep_package_loads_neither_ray_nor_matplotlib():
+    import subprocess
+    import sys
+
+    code = "import sys, somarm.sweep; print(sorted({'ray', 'matplotlib'} & set(sys.modules)))"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"
