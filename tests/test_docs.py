@@ -52,7 +52,7 @@ def test_example_runs(path, index, block, tmp_path, monkeypatch):
 def test_the_readme_is_a_short_front_door_whose_links_resolve():
     text = README.read_text()
     assert len(text.splitlines()) <= 250
-    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text)
+    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text) + re.findall(r'src="([^"]+)"', text)
     local = [t for t in targets if "://" not in t]
     assert local, "the README links to the docs"
     missing = [t for t in local if not (ROOT / t).exists()]
@@ -64,7 +64,7 @@ def test_the_cli_reference_covers_every_command_and_option():
 
     hooks = _hooks()
     reference = hooks.cli_reference()
-    sections = dict(re.findall(r"^## `(somarm[^`]*)`\n(.*?)(?=^## |\Z)", reference, re.S | re.M))
+    sections = dict(re.findall(r"^### `(somarm[^`]*)`\n(.*?)(?=^### |\Z)", reference, re.S | re.M))
     parser = cli._parser()
     (subparsers,) = [a for a in parser._actions if hasattr(a, "_choices_actions")]
     for name, sub in subparsers.choices.items():

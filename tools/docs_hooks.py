@@ -77,7 +77,7 @@ def help_text(argv: list[str]) -> str:
 
 
 def cli_reference() -> str:
-    """The command reference: one section per command, its ``--help`` verbatim."""
+    """The command reference: one section (a level-3 heading) per command, its ``--help`` verbatim."""
     from somarm import cli
 
     summaries = {a.dest: a.help for a in _subparsers(cli._parser())._choices_actions}
@@ -86,7 +86,7 @@ def cli_reference() -> str:
     for argv in commands():
         title = " ".join(["somarm", *argv])
         summary = f"{summaries[argv[0]][0].upper()}{summaries[argv[0]][1:]}.\n\n" if len(argv) == 1 else ""
-        sections.append(f"## `{title}`\n\n{summary}```text\n{help_text(argv)}```\n")
+        sections.append(f"### `{title}`\n\n{summary}```text\n{help_text(argv)}```\n")
     return "\n".join(sections)
 
 
