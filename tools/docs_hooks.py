@@ -24,7 +24,7 @@ if str(ROOT) not in sys.path:
 CLI_MARKER = "<!-- somarm-cli-reference -->"
 CHANGELOG_MARKER = "<!-- CHANGELOG.md -->"
 #: the width help is wrapped to, so the page does not depend on the terminal that built it
-HELP_COLUMNS = 100
+HELP_COLUMNS = 80
 
 __all__ = ["commands", "help_text", "cli_reference", "on_page_markdown"]
 
