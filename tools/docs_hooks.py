@@ -5,7 +5,8 @@
   through the same entry point, ``somarm.cli.main``);
 - ``docs/changelog.md``: the top-level ``CHANGELOG.md``.
 
-Each page holds a marker comment that the hook replaces; a page without its marker is left alone.
+Each page holds a pair of marker comments; the hook replaces them and what lies between (a note for
+readers of the unbuilt page). A page without the markers is left alone.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import argparse
 import contextlib
 import io
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -21,8 +23,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # Document the checkout the site is built from, even where another copy of somarm is installed.
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
-CLI_MARKER = "<!-- somarm-cli-reference -->"
-CHANGELOG_MARKER = "<!-- CHANGELOG.md -->"
+CLI_MARKER = "somarm-cli-reference"
+CHANGELOG_MARKER = "CHANGELOG.md"
 #: the width help is wrapped to, so the page does not depend on the terminal that built it
 HELP_COLUMNS = 80
 
@@ -90,10 +92,13 @@ def cli_reference() -> str:
     return "\n".join(sections)
 
 
+def _fill(markdown: str, marker: str, text) -> str:
+    """``markdown`` with ``<!-- marker -->...<!-- /marker -->`` replaced by ``text()``."""
+    pattern = re.compile(rf"<!-- {re.escape(marker)} -->.*?<!-- /{re.escape(marker)} -->\n?", re.S)
+    return pattern.sub(lambda _: text(), markdown) if pattern.search(markdown) else markdown
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    """MkDocs hook: fill the markers of ``cli.md`` and ``changelog.md``."""
-    if CLI_MARKER in markdown:
-        markdown = markdown.replace(CLI_MARKER, cli_reference())
-    if CHANGELOG_MARKER in markdown:
-        markdown = markdown.replace(CHANGELOG_MARKER, (ROOT / "CHANGELOG.md").read_text())
-    return markdown
+    """MkDocs hook: fill the marked parts of ``cli.md`` and ``changelog.md``."""
+    markdown = _fill(markdown, CLI_MARKER, cli_reference)
+    return _fill(markdown, CHANGELOG_MARKER, lambda: (ROOT / "CHANGELOG.md").read_text())
