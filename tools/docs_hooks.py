@@ -43,9 +43,10 @@ def commands() -> list[list[str]]:
 
     found: list[list[str]] = [[]]
     for name, sub in _subparsers(cli._parser()).choices.items():
-        positionals = [a for a in sub._actions if not a.option_strings and a.choices]
-        if positionals:  # a command that names what it forwards to: one entry per name
-            found.extend([name, choice] for choice in positionals[0].choices)
+        options = [a for a in sub._actions if a.option_strings and "-h" not in a.option_strings]
+        named = [a for a in sub._actions if not a.option_strings and a.choices]
+        if named and not options:  # only names what it forwards to (`bench NAME`): one entry per name
+            found.extend([name, choice] for choice in named[0].choices)
         else:
             found.append([name])
     return found
