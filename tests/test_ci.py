@@ -1,12 +1,19 @@
-"""CI cannot go green by skipping: with CI=true a skipped test fails (tests/conftest.py); .ci/run is strict."""
+"""CI cannot go green by skipping: with CI=true a skipped test fails (tests/conftest.py); .ci/run is strict
+and runs the README's test command, with every extra."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the test extra installs tomli there
+    import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -36,3 +43,20 @@ def test_ci_script_fails_without_chromium_and_installs_no_driver():
     assert "chromium-driver" not in script
     assert "export CI=true" in script
     assert "exit 1" in script and "warning: chromium install failed" not in script
+
+
+TEST_COMMAND = re.compile(r"^python3 -m venv \.venv && .*\.venv/bin/pytest$", re.M)
+
+
+def test_ci_runs_the_readmes_test_command_verbatim_and_the_docs_repeat_it():
+    (in_ci,) = TEST_COMMAND.findall((ROOT / ".ci" / "run").read_text())
+    assert TEST_COMMAND.findall((ROOT / "README.md").read_text()) == [in_ci]
+    assert TEST_COMMAND.findall((ROOT / "docs" / "install.md").read_text()) == [in_ci]
+    # every extra is installed, so CI skips nothing (the site's build needs `docs`)
+    extras = re.search(r'-e "\.\[([a-z,]+)\]"', in_ci).group(1).split(",")
+    assert set(extras) == set(tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"])
+
+
+def test_the_readme_keeps_the_one_line_set_up_and_reproduction():
+    command = "python3 -m venv .venv && .venv/bin/pip install -q -e . && .venv/bin/somarm reproduce --out reproduce"
+    assert f"\n{command}\n" in (ROOT / "README.md").read_text()
