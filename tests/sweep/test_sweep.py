@@ -80,7 +80,7 @@ def test_points_sharing_a_task_and_seed_train_in_one_group_cut_only_for_memory()
     assert len(chunks) == 4  # 2 task parameter sets x 2 seeds, each with both alphas
     for chunk in chunks:
         assert len({(c.seed, c.task_params["radius"]) for _, _, c in chunk.items}) == 1
-        assert sorted(c.overrides["alpha"] for _, _, c in chunk.items) == ["0.5", "1"]
+        assert sorted(c.overrides["alpha"] for _, _, c in chunk.items) == [0.5, 1.0]
     assert len(plan_chunks(items, max_bytes=1.0)) == 8  # too big for one group: one point each
 
 
@@ -144,7 +144,7 @@ def test_a_failing_point_is_recorded_with_its_error_and_the_others_finish(tmp_pa
     real = run.make_learner
 
     def broken_for_alpha_07(config, task):
-        if config.overrides.get("alpha") == "0.7":
+        if config.overrides.get("alpha") == 0.7:
             raise FloatingPointError("the learner diverged")
         return real(config, task)
 
