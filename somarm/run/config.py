@@ -129,14 +129,18 @@ class RunConfig:
         return resolved
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-able form (``config.json``): the overrides as their ``--set`` text, the learner config
-        as its ``to_dict`` where the preset and overrides do not give it (else null, so the file
-        reads as before); ``from_dict`` reads it back to an equal config."""
+        """JSON-able form (``config.json``): the overrides as their ``--set`` text, the task parameters
+        as JSON values, and the learner config as its ``to_dict`` only where the preset and overrides
+        do not give it (so a command-line run's file has the keys it always had); ``from_dict``
+        reads it back to an equal config."""
         from somarm.learners.settings import format_settings
 
         data = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         data["overrides"] = format_settings(self.overrides)
-        data["learner_config"] = None if self._derived_learner_config() else self.learner_config.to_dict()
+        if self._derived_learner_config():
+            del data["learner_config"]
+        else:
+            data["learner_config"] = self.learner_config.to_dict()
         data["task_params"] = json.loads(json.dumps(self.task_params))
         data["trial_ids"] = None if self.trial_ids is None else list(self.trial_ids)
         return data

@@ -221,7 +221,7 @@ def config_key(config: RunConfig) -> str:
     from somarm import tasks
 
     data = config.to_dict()
-    del data["learner_config"]
+    data.pop("learner_config", None)
     data["task_params"] = {k: tasks.format_param(v) for k, v in config.task_params.items()}
     text = json.dumps(data, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:16]

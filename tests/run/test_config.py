@@ -81,9 +81,10 @@ def test_config_json_round_trip_keeps_the_text_form_and_the_values():
                        task_params={"switch_step": 500}, trial_ids=[4, 7], n_trials=2).resolved()
     data = json.loads(json.dumps(config.to_dict()))
     assert data["overrides"] == {"decay": "inv:250", "n_a.floor": "1"}
-    assert data["task_params"] == {"switch_step": 500} and data["learner_config"] is None
+    assert data["task_params"] == {"switch_step": 500} and "learner_config" not in data  # the keys as before
     assert RunConfig.from_dict(data).resolved() == config
     own = RunConfig(task="reach2", learner_config=SOMQConfig(input_shape=(5,))).resolved()
+    assert own.to_dict()["learner_config"]["input_shape"] == [5]
     assert RunConfig.from_dict(json.loads(json.dumps(own.to_dict()))).resolved() == own
 
 
@@ -106,3 +107,16 @@ def test_a_config_json_written_before_typed_settings_still_loads():
 def test_a_hand_written_config_json_may_give_override_values_as_json():
     config = RunConfig.from_dict({"task": "reach2", "overrides": {"gamma": 0, "neighbourhood_q": False}})
     assert config.overrides == {"gamma": 0.0, "neighbourhood_q": False}
+
+
+def test_a_run_folder_with_the_older_config_json_loads_and_evaluates(tmp_path):
+    result = run.train(RunConfig(task="reach2", n_trials=2, n_steps=200, overrides={"input_shape": (10, 10)},
+                                 task_params={"radius": 0.2}), progress=False)
+    run.write(result, tmp_path, figures=False)
+    data = json.loads((tmp_path / "config.json").read_text())
+    assert data["overrides"] == {"input_shape": "10x10"} and data["task_params"] == {"radius": 0.2}
+    data["task_params"] = {"radius": "0.2"}  # as folders written before typed settings hold it
+    (tmp_path / "config.json").write_text(json.dumps(data))
+    config, learner = run.load(tmp_path)
+    assert config == result.config and config.task_params == {"radius": 0.2}
+    assert run.task_for(config, learner).params.radius == 0.2
