@@ -200,3 +200,13 @@ def test_a_bad_axis_value_is_named_with_its_point():
     spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,fast"),)).check()
     with pytest.raises(ValueError, match="^alpha=fast: could not convert string to float: 'fast'$"):
         spec.config(spec.points()[1], 0)
+
+
+def test_a_chunk_crosses_to_a_worker_as_json_and_comes_back_the_same_configs():
+    from somarm.sweep.work import Chunk
+
+    spec = SweepSpec(task="four_goals", axes=(parse_grid("decay=inv:250,exp:0.999"),
+                                              parse_grid("task.switch_step=500")), n_steps=1000).check()
+    chunk = Chunk(tuple((i, 0, spec.config(p, 0)) for i, p in enumerate(spec.points())))
+    back = Chunk.from_dict(json.loads(json.dumps(chunk.to_dict())))
+    assert [(i, s, c.resolved()) for i, s, c in back.items] == list(chunk.items)
