@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from somarm.streams import trial_ids_for
+from somarm.tasks.record import BACKENDS
 from somarm.validation import check_int
 
 __all__ = ["RunConfig", "add_options", "from_options", "parse_assignments"]
@@ -68,8 +69,11 @@ class RunConfig:
     """Training steps (one-step episodes); None takes the task's default."""
     seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=int, metavar="S"))
     """The run's seed: every random number of the run derives from it."""
-    backend: str = field(default="mujoco", metadata=_option("--backend", "mujoco or analytic", metavar="NAME"))
-    """Where rewards are computed: ``mujoco`` (default) or ``analytic``."""
+    backend: str = field(default="mujoco", metadata=_option(
+        "--backend", f"where rewards are computed: {' or '.join(BACKENDS)} (a task's record says which it takes)",
+        metavar="NAME"))
+    """Where rewards are computed: ``mujoco`` (default) or ``analytic`` (``tasks.BACKENDS``; each task's
+    record lists the ones it takes)."""
     block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=int, metavar="N"))
     """Steps per recorded point of the learning curves (mean reward over the block)."""
     trial_ids: list[int] | None = field(default=None, metadata=_option(
