@@ -27,7 +27,7 @@ def main() -> None:
         task="reach2",
         learner="somq",
         preset="table1",  # Table 1: 50x1 input map, 50x1 action map, f(t) = 1/(t/1000 + 1)
-        overrides={},  # e.g. {"epsilon": "0.2", "decay": "inv:2000"}
+        overrides={},  # typed, e.g. {"epsilon": 0.2, "decay": InverseDecay(2000.0)} (learners.schedules)
         n_trials=args.trials,
         n_steps=args.steps,
         seed=args.seed,

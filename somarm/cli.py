@@ -159,7 +159,7 @@ def _cmd_compare(args) -> int:
         peer_samples=args.peer_samples,
         seeds=args.seeds,
         observations=args.observations,
-        task_params=tasks.parse_values(parse_assignments(args.task_set, "--task-set")),
+        task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
     )
     compare.check(config)
     out = _out_folder(args.out, f"compare/{config.task}")

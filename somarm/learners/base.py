@@ -2,7 +2,7 @@
 
 ``LearnerBase`` is the base of SOM-Q and the Motoric Map (abstract ``act``, ``learn``,
 ``greedy_units``, ``predict``); ``ConfigBase`` gives a learner config ``to_dict``, ``from_dict``,
-``with_overrides`` and ``from_table``. The registry of kinds sits above, in ``somarm.learners``.
+``with_changes`` (typed settings by key, ``somarm.learners.settings``) and ``from_table``. The registry of kinds sits above, in ``somarm.learners``.
 
 A saved learner is one ``.npz`` (written atomically): its arrays, plus a JSON string holding
 the kind, config, bounds, seed, trial ids, step count and random-stream positions. Loading it
@@ -20,7 +20,8 @@ import numpy as np
 
 from somarm.learners import file as learner_file
 from somarm.learners.file import read_file, restore
-from somarm.learners.schedules import Schedule, parse_bool, parse_decay, parse_shape
+from somarm.learners.schedules import Schedule
+from somarm.learners.settings import apply_settings, parse_settings
 from somarm.learners.som import grid_coordinates, grid_distances, map_shape
 from somarm.streams import PURPOSES, UniformStreams, trial_ids_for
 from somarm.validation import check_bounds, check_int, check_memory, check_number, check_periodic, real_array
@@ -34,7 +35,6 @@ __all__ = [
     "validate_common",
     "config_to_dict",
     "config_from_dict",
-    "override_config",
 ]
 
 
@@ -124,52 +124,6 @@ def config_from_dict(cls: type, d: dict[str, Any]) -> Any:
     return cls(**values)
 
 
-def override_config(config: Any, overrides: dict[str, str]) -> Any:
-    """Apply command-line ``key=value`` strings to a learner config (see ``SOMQConfig.with_overrides``)."""
-    fields = {field.name: getattr(config, field.name) for field in dataclasses.fields(config)}
-    schedules = config.SCHEDULES
-    others = [name for name in fields if name not in schedules]
-    allowed = (
-        "decay, "
-        + ", ".join(f"{name}[.scale|.floor|.decay]" for name in schedules)
-        + ", "
-        + ", ".join(others)
-    )
-    for key, text in overrides.items():
-        name, _, part = str(key).partition(".")
-        try:
-            if key == "decay":
-                decay = parse_decay(text)
-                for sched in schedules:
-                    fields[sched] = fields[sched].with_changes(decay=decay)
-            elif name in schedules and part in ("", "scale"):
-                fields[name] = fields[name].with_changes(scale=check_number(name, float(text), minimum=0.0))
-            elif name in schedules and part == "floor":
-                fields[name] = fields[name].with_changes(floor=check_number(key, float(text), minimum=0.0))
-            elif name in schedules and part == "decay":
-                fields[name] = fields[name].with_changes(decay=parse_decay(text))
-            elif part or name not in others:
-                raise ValueError(f"unknown key {key!r}; allowed keys: {allowed}")
-            elif name.endswith("_shape"):
-                fields[name] = parse_shape(name, text)
-            elif isinstance(fields[name], bool):
-                fields[name] = parse_bool(name, text)
-            elif name == "input_init":
-                low_high = str(text).replace(",", ":").split(":")
-                fields[name] = None if str(text).lower() == "none" else tuple(float(v) for v in low_high)
-            elif name == "gamma":
-                fields[name] = float(text)
-            else:
-                fields[name] = str(text)
-            type(config)(**fields)  # validate now, so the error names this key
-        except ValueError as exc:
-            message = str(exc)
-            if not message.startswith("unknown key"):
-                message = f"{key}={text}: {message}"
-            raise ValueError(message) from None
-    return type(config)(**fields)
-
-
 class ConfigBase:
     """What every learner config (a frozen dataclass with a ``SCHEDULES`` tuple) shares."""
 
@@ -184,19 +138,30 @@ class ConfigBase:
         """Inverse of ``to_dict``. Raises ValueError naming a bad or unknown field."""
         return config_from_dict(cls, d)
 
-    def with_overrides(self, overrides: dict[str, str]):
-        """A copy with command-line ``key=value`` strings applied, e.g. ``{"decay": "exp:0.9985"}``.
+    def with_changes(self, changes: dict[str, Any]):
+        """A copy with typed settings changed by key, e.g. ``{"epsilon": 0.2, "decay": InverseDecay(250.0)}``.
 
-        Keys: ``decay`` (``inv:TAU``, ``exp:C`` or ``const``, for every schedule), ``<param>`` or
-        ``<param>.scale`` (a number), ``<param>.floor``, ``<param>.decay`` for each schedule,
-        ``input_shape``/``action_shape`` (``50`` or ``10x10``), ``gamma``, booleans such as
-        ``neighbourhood_q`` (true|false), ``noise`` (uniform|gaussian), ``input_init``
-        (``LOW:HIGH`` or ``none``); each config accepts its own fields only.
+        Keys: ``decay`` (a ``Decay``, for every schedule), ``<param>`` or ``<param>.scale`` (a
+        number), ``<param>.floor`` (a number) and ``<param>.decay`` (a ``Decay``) for each schedule,
+        and every other field by name (``input_shape=(10, 10)``, ``gamma=0.9``,
+        ``neighbourhood_q=False``, ``input_init=None``); see ``somarm.learners.settings``.
 
         Raises:
-          ValueError: one line naming the bad key or value and listing the allowed keys.
+          ValueError: one line naming the bad key or value (an unknown key lists the allowed ones).
         """
-        return override_config(self, overrides)
+        return apply_settings(self, changes)
+
+    def with_overrides(self, overrides: dict[str, str]):
+        """A copy with text settings (``--set KEY=VALUE``) read by ``parse_settings`` and applied.
+
+        E.g. ``{"decay": "exp:0.9985", "input_shape": "10x10", "neighbourhood_q": "false"}``: the
+        text forms of ``with_changes``'s values (a decay ``inv:TAU``, ``exp:C`` or ``const``, a shape
+        ``50`` or ``10x10``, a bool ``true|false``, ``input_init`` ``LOW:HIGH`` or ``none``).
+
+        Raises:
+          ValueError: one line naming the bad key or value (an unknown key lists the allowed ones).
+        """
+        return apply_settings(self, parse_settings(type(self), overrides))
 
     @classmethod
     def from_table(cls, table: Any):

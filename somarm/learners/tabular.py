@@ -22,7 +22,6 @@ values per joint give 10^6 actions, which is why a fixed grid cannot stand in fo
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from dataclasses import dataclass
 from typing import Any
@@ -30,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from somarm.learners import file as learner_file
-from somarm.learners.base import ConfigBase, override_config
+from somarm.learners.base import ConfigBase
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.streams import UniformStreams, trial_ids_for
 from somarm.validation import check_bounds, check_int, check_number, check_periodic
@@ -69,35 +68,6 @@ class TabularConfig(ConfigBase):
         if self.alpha is not None:
             check_number("alpha", self.alpha, minimum=0.0, maximum=1.0, strict_minimum=True)
         check_number("gamma", self.gamma, minimum=0.0, maximum=1.0)
-
-    def with_overrides(self, overrides: dict[str, str]) -> TabularConfig:
-        """A copy with command-line ``key=value`` strings applied.
-
-        Keys: ``observation_bins``, ``action_bins`` (whole numbers), ``alpha`` (a number or
-        ``none``), ``gamma``, and ``epsilon``/``epsilon.scale``/``.floor``/``.decay`` or ``decay``
-        as for SOM-Q's schedules.
-
-        Raises:
-          ValueError: one line naming the bad key or value and listing the allowed keys.
-        """
-        changes: dict[str, Any] = {}
-        rest = {}
-        for key, text in overrides.items():
-            try:
-                if key in ("observation_bins", "action_bins"):
-                    changes[key] = int(str(text))
-                elif key == "alpha":
-                    changes[key] = None if str(text).lower() == "none" else float(str(text))
-                else:
-                    rest[key] = text
-            except ValueError:
-                raise ValueError(f"{key}={text}: {key} must be "
-                                 f"{'a number or none' if key == 'alpha' else 'a whole number'}") from None
-        config = override_config(self, rest) if rest else self
-        try:
-            return dataclasses.replace(config, **changes)
-        except ValueError as exc:
-            raise ValueError(f"{', '.join(f'{k}={overrides[k]}' for k in changes)}: {exc}") from None
 
     @classmethod
     def from_table(cls, table: Any) -> TabularConfig:

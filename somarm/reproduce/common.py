@@ -104,13 +104,7 @@ def run_group(
 
 def _backend(task: str, backend: str) -> str:
     """``backend`` where the task has it; MuJoCo for a task without closed forms (reach2_obstacle)."""
-    if backend == "mujoco":
-        return backend
-    try:
-        tasks.make(task, backend=backend)
-    except ValueError:
-        return "mujoco"
-    return backend
+    return backend if backend in tasks.record(task).backends else "mujoco"
 
 
 def preset_choices(*names: str) -> list[str]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from somarm.reproduce.common import Context, fmt, preset_choices, run_group
@@ -71,7 +73,7 @@ def delayed_reward(ctx: Context) -> Section:
     n_steps = ctx.pick(20_000, 1_000)
     base = RunConfig(task="reach2_obstacle", preset="obstacle", n_trials=n_trials, n_steps=n_steps,
                      seed=ctx.seed, block=200)
-    configs = [base, RunConfig(**{**base.to_dict(), "overrides": {"gamma": "0"}})]
+    configs = [base, dataclasses.replace(base, overrides={"gamma": 0.0})]
     results = run_group(ctx, "reach2_obstacle gamma 0.9 / 0", configs)
     n_episodes = ctx.pick(_EPISODES, 20)
     greedy = [evaluation.greedy_episodes(r.learner, r.task, n_episodes=n_episodes, seed=ctx.seed) for r in results]

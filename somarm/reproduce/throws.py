@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from somarm import plots
+from somarm.learners.schedules import ExponentialDecay
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, run_group, typical_trial
 from somarm.reproduce.report import Claim, Section
@@ -199,7 +200,7 @@ def throw_maps(ctx: Context) -> Section:
         RunConfig(
             task="throw_distance",
             preset="table5",
-            overrides={"n_a": str(n_a)},
+            overrides={"n_a": n_a},
             n_trials=n_trials,
             n_steps=n_steps,
             seed=ctx.seed,
@@ -302,9 +303,9 @@ def neighbourhood_q(ctx: Context) -> Section:
     """Fig. 24: +NL/0.9985, -NL/0.9985 and -NL/0.9997 on throw_distance."""
     n_trials, n_steps = ctx.pick(20, 3), ctx.pick(25_000, 2_000)
     variants = {
-        "+NL/0.9985": {"neighbourhood_q": "true", "decay": "exp:0.9985"},
-        "-NL/0.9985": {"neighbourhood_q": "false", "decay": "exp:0.9985"},
-        "-NL/0.9997": {"neighbourhood_q": "false", "decay": "exp:0.9997"},
+        "+NL/0.9985": {"neighbourhood_q": True, "decay": ExponentialDecay(0.9985)},
+        "-NL/0.9985": {"neighbourhood_q": False, "decay": ExponentialDecay(0.9985)},
+        "-NL/0.9997": {"neighbourhood_q": False, "decay": ExponentialDecay(0.9997)},
     }
     configs = [
         RunConfig(

@@ -5,10 +5,12 @@ train`` options, their defaults and help are derived from its fields (as CleanRL
 command line from a dataclass), and it is saved as ``config.json``. ``train``/``train_group``
 (``somarm.run.group``) build the task and the learners once (``somarm.run.build``) and hand them
 to the loop in ``somarm.run.loop``; ``write`` and ``load`` (``somarm.run.folder``) own the run
-folder::
+folder. Settings are typed values: the command line's text is read once, at the front end::
 
-    result = run.train(RunConfig(task="reach2", n_trials=20))
+    result = run.train(RunConfig(task="reach2", n_trials=20, overrides={"epsilon": 0.2},
+                                 task_params={"radius": 0.2}))
     run.write(result, "runs/reach2", extra_summary=run.greedy_summary(result))
+    run.train(RunConfig(task="reach2", learner_config=SOMQConfig(input_shape=(10, 10))))
 """
 
 from somarm.run.build import check_memory_needs, make, make_learner, make_task

@@ -1,4 +1,7 @@
-"""Building a run: its task and learner from a resolved ``RunConfig``, after a memory check."""
+"""Building a run: its task and learner from a resolved ``RunConfig``, after a memory check.
+
+Everything here reads typed values: the resolved config's ``learner_config`` and ``task_params``.
+"""
 
 from __future__ import annotations
 
@@ -20,19 +23,17 @@ def make_task(config: RunConfig, trial_ids: np.ndarray | None = None) -> Batched
 
     ids = config.trial_ids_array() if trial_ids is None else trial_ids
     return tasks.make(config.task, n_trials=len(ids), seed=config.seed, trial_ids=ids, backend=config.backend,
-                      **tasks.parse_values(config.task_params))
+                      **config.task_params)
 
 
 def make_learner(config: RunConfig, task: BatchedTask) -> Learner:
     """The learner of a (resolved) run config, reading the task's observation and action boxes (bounds
     and periodic action dimensions)."""
     from somarm import learners
-    from somarm.learners import presets
 
-    learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
     return learners.make(
         config.learner,
-        learner_config,
+        config.learner_config,
         observation_low=task.observation_low,
         observation_high=task.observation_high,
         action_low=task.action_low,
@@ -62,13 +63,11 @@ def check_memory_needs(configs: list[RunConfig]) -> None:
     Raises:
       ValueError: one line naming the settings and the size.
     """
-    from somarm.learners import presets
     from somarm.learners.base import memory_needed
 
     total, described = 0.0, []
     for config in configs:
-        learner_config = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
-        what, n_bytes = memory_needed(config.learner, learner_config, config.n_trials, 1, 1)
+        what, n_bytes = memory_needed(config.learner, config.learner_config, config.n_trials, 1, 1)
         total += n_bytes + (16.0 * (config.n_steps // config.block) + _STREAM_BYTES_PER_TRIAL) * config.n_trials
         described.append(what)
     check_memory(f"{'; '.join(described)}, over {configs[0].n_steps} steps", total,

@@ -3,25 +3,33 @@
 Each field's metadata holds its command-line form (``_option``); ``add_options`` turns the fields
 into argparse options and ``from_options`` turns parsed options back into a resolved config, so a
 new setting is one field here. Runs use it through ``somarm.run``.
+
+A ``RunConfig`` holds typed values only: the command line's ``--set`` and ``--task-set`` text is
+read once, in ``from_options`` (``learners.settings.parse_settings``, ``tasks.parse_params``), and
+``config.json``'s in ``from_dict``; ``resolved`` then builds the learner's config (``SOMQConfig``
+...) that the run uses. ``to_dict`` writes the learner settings as their ``--set`` text again, so
+a run folder's ``config.json`` reads as the command that made it.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from somarm.streams import trial_ids_for
+from somarm.tasks.record import BACKENDS
 from somarm.validation import check_int
 
 __all__ = ["RunConfig", "add_options", "from_options", "parse_assignments"]
 
 
-def _option(flag: str, help: str, **argparse_kwargs: Any) -> dict[str, Any]:
-    """A field's command-line form: ``flag`` (or a positional name), help, argparse keywords."""
+def _option(flag: str | None, help: str = "", **argparse_kwargs: Any) -> dict[str, Any]:
+    """A field's command-line form: ``flag`` (or a positional name; None: no option), help, argparse keywords."""
     return {"flag": flag, "help": help, "argparse": argparse_kwargs}
 
 
@@ -41,12 +49,19 @@ class RunConfig:
     preset: str | None = field(default=None, metadata=_option(
         "--preset", "parameter table (see `somarm presets`); default: the task's", metavar="TABLE"))
     """Parameter table by name (``table1`` ...); None takes the task's default."""
-    overrides: dict[str, str] = field(default_factory=dict, metadata=_option(
-        "--set", "change a learner setting", action="append", metavar="KEY=VALUE"))
-    """Learner settings changed from the preset, as the CLI's ``--set KEY=VALUE``."""
+    overrides: dict[str, Any] = field(default_factory=dict, metadata=_option(
+        "--set", "change a learner setting, e.g. epsilon=0.2, decay=inv:250, n_a.floor=1, input_shape=10x10",
+        action="append", metavar="KEY=VALUE"))
+    """Learner settings changed from the preset, typed, by ``--set`` key: ``{"epsilon": 0.2,
+    "decay": InverseDecay(250.0)}`` (``SOMQConfig.with_changes`` lists the keys)."""
+    learner_config: Any = field(default=None, metadata=_option(None))
+    """The learner's own config (``SOMQConfig``, ``MotoricConfig``, ``TabularConfig``) that ``overrides``
+    change; None takes the preset's. ``resolved`` fills it in with the overrides made (a Python
+    caller may give a whole config here; the command line gives a preset and ``--set``)."""
     task_params: dict[str, Any] = field(default_factory=dict, metadata=_option(
-        "--task-set", "change a task parameter", action="append", metavar="KEY=VALUE"))
-    """Task parameters changed from their defaults (``--task-set KEY=VALUE``)."""
+        "--task-set", "change a task parameter, e.g. radius=0.2, punish_low=true", action="append",
+        metavar="KEY=VALUE"))
+    """Task parameters changed from their defaults, typed: ``{"radius": 0.2, "punish_low": True}``."""
     n_trials: int = field(default=1, metadata=_option("--trials", "independent trials", type=int, metavar="N"))
     """Independent trials advanced together (each has its own random streams)."""
     n_steps: int | None = field(default=None, metadata=_option(
@@ -54,8 +69,11 @@ class RunConfig:
     """Training steps (one-step episodes); None takes the task's default."""
     seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=int, metavar="S"))
     """The run's seed: every random number of the run derives from it."""
-    backend: str = field(default="mujoco", metadata=_option("--backend", "mujoco or analytic", metavar="NAME"))
-    """Where rewards are computed: ``mujoco`` (default) or ``analytic``."""
+    backend: str = field(default="mujoco", metadata=_option(
+        "--backend", f"where rewards are computed: {' or '.join(BACKENDS)} (a task's record says which it takes)",
+        metavar="NAME"))
+    """Where rewards are computed: ``mujoco`` (default) or ``analytic`` (``tasks.BACKENDS``; each task's
+    record lists the ones it takes)."""
     block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=int, metavar="N"))
     """Steps per recorded point of the learning curves (mean reward over the block)."""
     trial_ids: list[int] | None = field(default=None, metadata=_option(
@@ -68,22 +86,36 @@ class RunConfig:
         return trial_ids_for(self.n_trials, self.trial_ids)
 
     def resolved(self) -> RunConfig:
-        """A copy with the task's defaults (from its record) filled in and every field checked.
+        """A copy with the task's defaults (from its record) filled in, the learner config built and
+        every field checked.
 
         Raises:
-          ValueError: an unknown task or learner kind, or a setting out of range (one line).
+          ValueError: an unknown task, learner kind, preset or backend, a learner setting or task
+            parameter of the wrong type or out of range, a setting out of range (one line).
         """
-        from somarm import learners, tasks
+        from somarm import tasks
+        from somarm.learners import presets
 
         record = tasks.record(self.task)
-        if self.learner not in learners.KINDS:
-            raise ValueError(f"unknown learner {self.learner!r}; allowed: {', '.join(learners.KINDS)}")
+        config_type = _config_class(self.learner)
+        tasks.check_backend(self.task, self.backend)
+        if self.preset is not None:
+            presets.get(self.preset)  # an unknown table is named even beside a learner_config
+        if self.learner_config is None:
+            preset = self.preset or record.preset
+            base = presets.config_for(self.learner, preset)
+        elif isinstance(self.learner_config, config_type):
+            preset, base = self.preset, self.learner_config
+        else:
+            raise ValueError(f"learner_config of a {self.learner} learner must be a {config_type.__name__}, "
+                             f"got {type(self.learner_config).__name__}")
         resolved = dataclasses.replace(
             self,
-            preset=self.preset or record.preset,
+            preset=preset,
+            learner_config=base.with_changes(self.overrides),
             n_steps=self.n_steps if self.n_steps is not None else record.n_steps,
             overrides=dict(self.overrides),
-            task_params=dict(self.task_params),
+            task_params=tasks.check_params(self.task, self.task_params),
         )
         # Named by their somarm train flags: that is where a user meets them.
         check_int("--trials", resolved.n_trials)
@@ -101,11 +133,49 @@ class RunConfig:
         return resolved
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """JSON-able form (``config.json``): the overrides as their ``--set`` text, the task parameters
+        as JSON values, and the learner config as its ``to_dict`` only where the preset and overrides
+        do not give it (so a command-line run's file has the keys it always had); ``from_dict``
+        reads it back to an equal config."""
+        from somarm.learners.settings import format_settings
+
+        data = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        data["overrides"] = format_settings(self.overrides)
+        if self._derived_learner_config():
+            del data["learner_config"]
+        else:
+            data["learner_config"] = self.learner_config.to_dict()
+        data["task_params"] = json.loads(json.dumps(self.task_params))
+        data["trial_ids"] = None if self.trial_ids is None else list(self.trial_ids)
+        return data
+
+    def _derived_learner_config(self) -> bool:
+        """True if ``learner_config`` is unset or is its preset's with the overrides (so need not be written)."""
+        from somarm import learners
+        from somarm.learners import presets
+
+        if self.learner_config is None:
+            return True
+        if self.learner not in learners.KINDS or self.preset not in presets.PRESETS:
+            return False
+        try:
+            return presets.config_for(self.learner, self.preset).with_changes(self.overrides) == self.learner_config
+        except ValueError:
+            return False
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RunConfig:
-        """Inverse of ``to_dict``; ValueError naming a missing, unknown or mistyped setting."""
+        """Inverse of ``to_dict``: the text of overrides and task parameters read once, here.
+
+        Reads every ``config.json`` written so far: one without ``learner_config`` (the preset and
+        overrides give it) and one whose task parameters are text (``{"radius": "0.2"}``).
+
+        Raises:
+          ValueError: a missing, unknown or mistyped setting (one line naming it).
+        """
+        from somarm import tasks
+        from somarm.learners.settings import parse_settings
+
         names = {f.name for f in dataclasses.fields(cls)}
         if not isinstance(data, dict):
             raise ValueError(f"run settings must be a JSON object with keys {', '.join(sorted(names))}")
@@ -117,7 +187,29 @@ class RunConfig:
         for key in ("overrides", "task_params"):
             if not isinstance(data.get(key, {}), dict):
                 raise ValueError(f"run setting {key!r} must be a JSON object of KEY: VALUE")
-        return cls(**data)
+        values = dict(data)
+        config_type = _config_class(values.get("learner", "somq"))
+        values["overrides"] = parse_settings(config_type, {k: _text(v) for k, v in data.get("overrides", {}).items()})
+        values["task_params"] = tasks.parse_params(data["task"], data.get("task_params", {}))
+        if values.get("learner_config") is not None:
+            if not isinstance(values["learner_config"], dict):
+                raise ValueError("run setting 'learner_config' must be a JSON object of the learner's fields")
+            values["learner_config"] = config_type.from_dict(values["learner_config"])
+        return cls(**values)
+
+
+def _config_class(kind: str) -> type:
+    """The config class of learner ``kind``; ValueError listing the kinds."""
+    from somarm import learners
+
+    if kind not in learners.KINDS:
+        raise ValueError(f"unknown learner {kind!r}; allowed: {', '.join(learners.KINDS)}")
+    return learners.config_class(kind)
+
+
+def _text(value: Any) -> str:
+    """A ``config.json`` override as ``--set`` text (a hand-written ``0`` or ``false`` too)."""
+    return json.dumps(value) if isinstance(value, (bool, int, float)) else str(value)
 
 
 def _check_blocks(n_steps: int, block: int) -> None:
@@ -137,6 +229,8 @@ def add_options(parser: argparse.ArgumentParser) -> None:
     """Add one option per ``RunConfig`` field (flag, help and default from the field)."""
     for f in dataclasses.fields(RunConfig):
         option = f.metadata
+        if option["flag"] is None:
+            continue
         kwargs = dict(option["argparse"])
         default = None if f.default is dataclasses.MISSING else f.default
         text = option["help"]
@@ -163,15 +257,20 @@ def parse_assignments(items: list[str] | None, what: str) -> dict[str, str]:
 
 
 def from_options(args: argparse.Namespace) -> RunConfig:
-    """The resolved ``RunConfig`` of parsed ``add_options`` arguments.
+    """The resolved ``RunConfig`` of parsed ``add_options`` arguments: the one place the text of
+    ``--set`` and ``--task-set`` is read.
 
     Raises:
-      ValueError: a malformed ``KEY=VALUE``, ``--trials`` disagreeing with ``--trial-ids``, or
-        any error of ``RunConfig.resolved``.
+      ValueError: a malformed ``KEY=VALUE``, an unknown key or a value of the wrong form,
+        ``--trials`` disagreeing with ``--trial-ids``, or any error of ``RunConfig.resolved``.
     """
-    values = {f.name: getattr(args, f.name) for f in dataclasses.fields(RunConfig)}
-    values["overrides"] = parse_assignments(args.overrides, "--set")
-    values["task_params"] = parse_assignments(args.task_params, "--task-set")
+    from somarm import tasks
+    from somarm.learners.settings import parse_settings
+
+    values = {f.name: getattr(args, f.name) for f in dataclasses.fields(RunConfig) if f.metadata["flag"]}
+    tasks.record(args.task)  # an unknown task is named before its parameters
+    values["overrides"] = parse_settings(_config_class(args.learner), parse_assignments(args.overrides, "--set"))
+    values["task_params"] = tasks.parse_params(args.task, parse_assignments(args.task_params, "--task-set"))
     trials, ids = args.n_trials, args.trial_ids
     if ids and trials is not None and trials != len(ids):
         raise ValueError(f"--trials {trials} disagrees with {len(ids)} --trial-ids; give one of them")

@@ -212,6 +212,6 @@ def task_for(config: RunConfig, learner: Learner) -> BatchedTask:
     from somarm import tasks
 
     task = tasks.make(config.task, n_trials=learner.n_trials, seed=config.seed, backend=config.backend,
-                      **tasks.parse_values(config.task_params))
+                      **config.task_params)
     task.set_step(learner.t)
     return task

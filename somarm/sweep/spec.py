@@ -1,8 +1,9 @@
 """What a sweep searches: grid and random axes over ``--set`` keys and ``task.KEY`` parameters.
 
 A *point* is one full run configuration (a ``RunConfig`` without its seed); the sweep runs every
-point once per seed. Axis values stay strings, exactly as ``somarm train --set KEY=VALUE`` takes
-them, so the best point can be rerun as it was swept.
+point once per seed. Axis values stay text, exactly as ``somarm train --set KEY=VALUE`` takes
+them, so the tables show and the best point reruns them as they were swept; ``SweepSpec.config``
+reads them once into a typed ``RunConfig``.
 """
 
 from __future__ import annotations
@@ -111,10 +112,10 @@ class SweepSpec:
     axes: tuple[Axis, ...] = ()
     n_samples: int = 0
     """Random draws (each combined with every grid point); needs at least one random axis."""
-    overrides: dict[str, str] = field(default_factory=dict)
-    """Learner settings fixed for every point (``--set``)."""
-    task_params: dict[str, str] = field(default_factory=dict)
-    """Task parameters fixed for every point (``--task-set``)."""
+    overrides: dict[str, Any] = field(default_factory=dict)
+    """Learner settings fixed for every point, typed (``RunConfig.overrides``)."""
+    task_params: dict[str, Any] = field(default_factory=dict)
+    """Task parameters fixed for every point, typed (``RunConfig.task_params``)."""
     n_trials: int = 1
     n_steps: int | None = None
     seed: int = 0
@@ -176,21 +177,53 @@ class SweepSpec:
                 for combo in combos for draw in draws]
 
     def config(self, point: dict[str, str], seed: int) -> RunConfig:
-        """The resolved run configuration of ``point`` at ``seed``."""
-        overrides = {k: v for k, v in point.items() if not k.startswith(TASK_PREFIX)}
-        task_params = {k[len(TASK_PREFIX):]: v for k, v in point.items() if k.startswith(TASK_PREFIX)}
+        """The resolved run configuration of ``point`` at ``seed``: its text values read here, once.
+
+        Raises:
+          ValueError: an unknown key or a bad value (one line, as ``somarm train`` gives it).
+        """
+        from somarm import learners, tasks
+        from somarm.learners.settings import parse_settings
+
+        overrides = parse_settings(learners.config_class(self.learner),
+                                   {k: v for k, v in point.items() if not k.startswith(TASK_PREFIX)})
+        task_params = tasks.parse_params(self.task, {k[len(TASK_PREFIX):]: v for k, v in point.items()
+                                                     if k.startswith(TASK_PREFIX)})
         base = self.base_config(seed)
         return dataclasses.replace(
             base, overrides={**base.overrides, **overrides}, task_params={**base.task_params, **task_params}
         ).resolved()
 
+    def fixed_texts(self) -> dict[str, str]:
+        """The settings fixed for every point as text by sweep key (``alpha``, ``task.radius``)."""
+        from somarm import tasks
+        from somarm.learners.settings import format_settings
+
+        return {**format_settings(self.overrides),
+                **{TASK_PREFIX + k: tasks.format_param(v) for k, v in self.task_params.items()}}
+
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """JSON-able form (``sweep.json``): the fixed settings as their ``--set``/``--task-set`` text."""
+        from somarm import tasks
+        from somarm.learners.settings import format_settings
+
+        return {**dataclasses.asdict(self), "overrides": format_settings(self.overrides),
+                "task_params": {k: tasks.format_param(v) for k, v in self.task_params.items()}}
 
 
 def config_key(config: RunConfig) -> str:
-    """A short stable name of a resolved run configuration (the file name of its result)."""
-    text = json.dumps(config.to_dict(), sort_keys=True)
+    """A short stable name of a resolved run configuration (the file name of its result).
+
+    Named by the settings as ``somarm train`` takes them (the learner settings and task parameters
+    as their text; the learner config follows from the preset and them), so one point keeps its
+    name however it was written (``alpha=1`` and ``alpha=1.0``).
+    """
+    from somarm import tasks
+
+    data = config.to_dict()
+    data.pop("learner_config", None)
+    data["task_params"] = {k: tasks.format_param(v) for k, v in config.task_params.items()}
+    text = json.dumps(data, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -226,8 +259,9 @@ def preset_value(spec: SweepSpec, key: str) -> str | None:
 
 def _decay_text(decay) -> str:
     """A decay as the shortest ``--set`` text (``inv:1000``, not ``inv:1000.0``)."""
-    kind, _, number = decay.to_text().partition(":")
-    return f"{kind}:{float(number):g}" if number else kind
+    from somarm.learners.settings import format_setting
+
+    return format_setting(decay)
 
 
 def same_value(a: str, b: str) -> bool:

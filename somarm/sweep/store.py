@@ -69,7 +69,7 @@ class Table:
                     self.rows.append({"point": index, **row})
 
     def columns(self) -> list[str]:
-        fixed = [*self.spec.overrides, *(TASK_PREFIX + k for k in self.spec.task_params)]
+        fixed = list(self.spec.fixed_texts())
         return ["point", "seed", *self.keys, *fixed, "task", "learner", "preset", "trials", "steps_requested",
                 *METRICS, "steps", "group_wall_time_s", "error"]
 
@@ -80,7 +80,7 @@ class Table:
         writer.writeheader()
         spec = self.spec
         for row in self.rows:
-            base = {**spec.overrides, **{TASK_PREFIX + k: v for k, v in spec.task_params.items()}}
+            base = spec.fixed_texts()
             writer.writerow({
                 **base, **self.points[row["point"]], **{k: row.get(k, "") for k in row if k != "key"},
                 "task": spec.task, "learner": spec.learner, "preset": spec.preset,
@@ -117,9 +117,15 @@ class Table:
         return None
 
 
+def _split(texts: dict[str, str]) -> tuple[dict[str, str], dict[str, str]]:
+    """Text settings by sweep key as ``(--set, --task-set)`` settings."""
+    return ({k: v for k, v in texts.items() if not k.startswith(TASK_PREFIX)},
+            {k[len(TASK_PREFIX):]: v for k, v in texts.items() if k.startswith(TASK_PREFIX)})
+
+
 def _train_command(spec: SweepSpec, values: dict[str, str]) -> list[str]:
-    learner = {**spec.overrides, **{k: v for k, v in values.items() if not k.startswith(TASK_PREFIX)}}
-    task = {**spec.task_params, **{k[len(TASK_PREFIX):]: v for k, v in values.items() if k.startswith(TASK_PREFIX)}}
+    (fixed_learner, fixed_task), (learner, task) = _split(spec.fixed_texts()), _split(values)
+    learner, task = {**fixed_learner, **learner}, {**fixed_task, **task}
     argv = ["somarm", "train", spec.task, "--learner", spec.learner, "--preset", str(spec.preset)]
     for key, value in learner.items():
         argv += ["--set", f"{key}={value}"]
@@ -176,12 +182,11 @@ def write_outputs(out: Path, table: Table, *, figure: bool = True) -> str:
     line = summary_line(table)
     if best is not None:
         argv = _train_command(table.spec, best["values"])
+        (fixed_learner, fixed_task), (learner, task) = _split(table.spec.fixed_texts()), _split(best["values"])
         atomic_write_json(out / "best.json", {
             **best,
-            "set": [f"{k}={v}" for k, v in {**table.spec.overrides, **best["values"]}.items()
-                    if not k.startswith(TASK_PREFIX)],
-            "task_set": [f"{k[len(TASK_PREFIX):]}={v}" for k, v in best["values"].items()
-                         if k.startswith(TASK_PREFIX)] + [f"{k}={v}" for k, v in table.spec.task_params.items()],
+            "set": [f"{k}={v}" for k, v in {**fixed_learner, **learner}.items()],
+            "task_set": [f"{k}={v}" for k, v in task.items()] + [f"{k}={v}" for k, v in fixed_task.items()],
             "command": shlex.join(argv),
             "summary": line,
         })

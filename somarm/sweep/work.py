@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from somarm import run
-from somarm.learners import presets
 from somarm.run.config import RunConfig
 from somarm.sweep.spec import SweepSpec, config_key
 
@@ -57,8 +56,7 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
     tasks_checked: set[str] = set()
     for point in points:
         try:
-            config = spec.config(point, spec.seed)
-            presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
+            config = spec.config(point, spec.seed)  # reads and checks its learner settings and task parameters
             task_key = json.dumps(config.task_params, sort_keys=True)
             if task_key not in tasks_checked:
                 run.make_task(config)
@@ -69,7 +67,7 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
 
 def _bytes_per_point(config: RunConfig) -> int:
     """Rough memory of one point's learner (maps, Q and working arrays of all its trials)."""
-    learner = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
+    learner = config.learner_config
     n_in, n_act = int(np.prod(learner.input_shape)), int(np.prod(learner.action_shape))
     per_trial = n_in * 4 + n_act * 4 + n_in * n_act  # weights (up to 4 dims) and Q
     return 8 * (config.n_trials * per_trial + n_in * n_in + n_act * n_act) * 3

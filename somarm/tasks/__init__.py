@@ -17,12 +17,13 @@ package is light: the task modules, and with them MuJoCo and dm_control, load on
 from __future__ import annotations
 
 import importlib
+import json
 from typing import Any
 
-from somarm.tasks.record import TaskRecord, parse_values
+from somarm.tasks.record import BACKENDS, TaskRecord
 
-__all__ = ["names", "describe", "record", "records", "params_type", "parse_values", "load", "make",
-           "set_threads", "threads", "TaskRecord"]
+__all__ = ["names", "describe", "record", "records", "params_type", "parse_params", "format_param", "check_params",
+           "check_backend", "load", "make", "set_threads", "threads", "TaskRecord", "BACKENDS"]
 
 #: The modules holding task records (each defines ``RECORDS``); a new task module adds one line.
 _MODULES = ("reach", "four_goals", "throw", "obstacle")
@@ -66,6 +67,62 @@ def describe(name: str) -> str:
 def params_type(name: str) -> type:
     """The frozen dataclass holding task ``name``'s parameters."""
     return record(name).params
+
+
+def parse_params(name: str, texts: dict[str, str]) -> dict[str, Any]:
+    """Task parameters as text (``--task-set KEY=VALUE``) read once into values.
+
+    A text that reads as JSON (``4.5``, ``true``, ``[[0.1, 0.2]]``) becomes that value, any other
+    text stays text (``dynamics=actuated``); ``check_params`` then checks the values' types and ranges.
+
+    Raises:
+      ValueError: an unknown task or parameter (the settable ones are listed).
+    """
+    record(name).check_settable(texts)
+    out = {}
+    for key, text in texts.items():
+        try:
+            out[key] = json.loads(text) if isinstance(text, str) else text
+        except json.JSONDecodeError:
+            out[key] = text
+    return out
+
+
+def format_param(value: Any) -> str:
+    """A task parameter as ``--task-set`` text that ``parse_params`` reads back (``0.2``, ``true``, ``actuated``)."""
+    return value if isinstance(value, str) else json.dumps(value)
+
+
+def check_params(name: str, params: dict[str, Any]) -> dict[str, Any]:
+    """Typed task parameters checked against task ``name``'s params dataclass; returns a copy.
+
+    Raises:
+      ValueError: an unknown parameter, text where a value is wanted (``"0.2"`` for ``0.2``: read
+        text with ``parse_params``) or a value the params class refuses (one line).
+    """
+    entry = record(name)
+    entry.check_settable(params)
+    texts = entry.text_fields()
+    for key, value in params.items():
+        if isinstance(value, str) and key not in texts:
+            raise ValueError(f"task parameter {key} of {name} must be a value, got the text {value!r} "
+                             "(tasks.parse_params reads text)")
+    entry.params_from(params)
+    return dict(params)
+
+
+def check_backend(name: str, backend: str) -> str:
+    """``backend`` if task ``name`` can compute its rewards there (its record's ``backends``).
+
+    Raises:
+      ValueError: an unknown backend, or one the task lacks (one line naming the task's backends).
+    """
+    entry = record(name)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
+    if backend not in entry.backends:
+        raise ValueError(f"{name} needs the {' or '.join(entry.backends)} backend, got backend {backend!r}")
+    return backend
 
 
 def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend: str = "mujoco",

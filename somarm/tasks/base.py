@@ -16,12 +16,12 @@ from dm_control.rl import control
 from dm_env import specs
 
 from somarm.streams import UniformStreams, trial_ids_for
+from somarm.tasks.record import BACKENDS
 from somarm.validation import real_array
 
 __all__ = ["Backend", "BACKENDS", "OneStepTask", "OneStepEnvTask", "check_actions", "step_together"]
 
 Backend = Literal["mujoco", "analytic"]
-BACKENDS: tuple[str, ...] = ("mujoco", "analytic")
 
 
 def check_actions(name: str, actions: object, low: np.ndarray, high: np.ndarray) -> np.ndarray:

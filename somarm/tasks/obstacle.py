@@ -337,6 +337,7 @@ RECORDS = (
         model="arm2_obstacle",
         observation_labels=("theta1 (rad)", "theta2 (rad)"),
         action_labels=("change of theta1's target (normalised)", "change of theta2's target (normalised)"),
+        backends=("mujoco",),
         episodic=True,
     ),
 )

@@ -8,27 +8,14 @@ the viewer read them instead of keeping tables of their own.
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["TaskRecord", "parse_values"]
+__all__ = ["TaskRecord", "BACKENDS"]
 
-
-def parse_values(given: dict[str, Any]) -> dict[str, Any]:
-    """Parameter values as the CLI gives them (``"4.5"``, ``"true"``, ``"[[0.1, 0.2]]"``) made values.
-
-    A string that parses as JSON (a number, a boolean, a list) becomes that value; any other
-    string stays as it is (the params class then names what it expected). Non-strings pass.
-    """
-    out = {}
-    for key, value in given.items():
-        try:
-            out[key] = json.loads(value) if isinstance(value, str) else value
-        except json.JSONDecodeError:
-            out[key] = value
-    return out
+#: Where a task's rewards can be computed: MuJoCo, or the closed forms of the kinematics and ballistics.
+BACKENDS = ("mujoco", "analytic")
 
 
 @dataclass(frozen=True)
@@ -62,6 +49,9 @@ class TaskRecord:
     """How ``somarm view`` shows a trained learner: ``goals`` (one pose per goal, in turn),
     ``sweep`` (every goal's posture at once, as Fig. 11) or ``fan`` (every action unit thrown at
     once, as Fig. 16)."""
+    backends: tuple[str, ...] = BACKENDS
+    """Where the rewards can be computed (``make(..., backend=)``); a task without closed forms
+    (contacts) has ``mujoco`` only."""
     episodic: bool = False
     """Episodes last several steps (the task's ``step`` sets ``next_observations``/``terminal``);
     False for the one-step tasks (``somarm.peers.gym`` adapts those)."""
@@ -72,11 +62,20 @@ class TaskRecord:
         Raises:
           ValueError: a name that is not settable (the settable ones are listed) or a bad value.
         """
+        self.check_settable(given)
+        return self.params(**given)
+
+    def check_settable(self, given: dict[str, Any]) -> None:
+        """Refuse a parameter name that is not settable (ValueError listing the settable ones)."""
         unknown = sorted(set(given) - set(self.settable))
         if unknown:
             raise ValueError(f"unknown parameter(s) {', '.join(unknown)} for task {self.name}; "
                              f"its parameters: {', '.join(self.settable)}")
-        return self.params(**given)
+
+    def text_fields(self) -> tuple[str, ...]:
+        """The parameters whose values are text (a ``str`` or ``Literal`` annotation), e.g. ``dynamics``."""
+        return tuple(field.name for field in dataclasses.fields(self.params)
+                     if any(word in str(field.type) for word in ("str", "Literal")))
 
     def fields(self) -> tuple[str, ...]:
         """Every field of the params class (settable or not)."""

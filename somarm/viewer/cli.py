@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"--html takes a file name, got {'a folder, ' if args.html else ''}{args.html!r}")
         from somarm.run.config import parse_assignments
 
-        task_set = parse_assignments(args.task_set, "--task-set")
+        task_set = tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set"))
         session = sessions.load_session(args.task, run=args.run, n_goals=args.goals, seed=args.seed,
                                         trial=args.trial, task_set=task_set)
         if args.html is not None:

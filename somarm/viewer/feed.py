@@ -44,7 +44,7 @@ def own_task(task_name: str, task_params: dict | None):
     """
     from somarm import tasks
 
-    return tasks.make(task_name, n_trials=1, **tasks.parse_values(task_params or {}))
+    return tasks.make(task_name, n_trials=1, **(task_params or {}))
 
 
 def attach_feed(bridge, task_name: str, task_params: dict | None) -> str:

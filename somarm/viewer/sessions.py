@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -62,7 +63,7 @@ def _sweep_order(observations: np.ndarray) -> np.ndarray:
 
 
 def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int = 12, seed: int = 0,
-                 trial: int | None = None, task_set: dict[str, str] | None = None) -> Session:
+                 trial: int | None = None, task_set: dict[str, Any] | None = None) -> Session:
     """Goals drawn from the task (the ``viewer`` random stream of ``seed``) and the learner's answers.
 
     Args:
@@ -72,7 +73,8 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
       seed: seed of the goals (and of the untrained learner).
       trial: which trial of the run's learner is shown, by its trial id (a run of ``--trial-ids 7``
         holds trial 7); None shows the run's first trial.
-      task_set: task parameters changed over the run's (``--task-set``), e.g. ``{"dynamics": "actuated"}``.
+      task_set: task parameters changed over the run's, typed (``--task-set`` read by
+        ``tasks.parse_params``), e.g. ``{"dynamics": "actuated", "settle_time": 0.5}``.
 
     Raises:
       ValueError: the run is for another task, or ``trial`` is not one of its trials.
@@ -84,7 +86,7 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         config, learner = runs.load(run)
         if config.task != task_name:
             raise ValueError(f"--run {run} trained task {config.task!r}, not {task_name!r}")
-        task_params = tasks.parse_values(config.task_params)
+        task_params = config.task_params
     else:
         config = runs.RunConfig(task=task_name, seed=seed).resolved()
         _, learner = runs.make(config)
@@ -94,7 +96,7 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         allowed = f"0..{ids[-1]}" if ids == list(range(len(ids))) else ", ".join(map(str, ids))
         raise ValueError(f"--trial must be one of this run's trials ({allowed}), got {trial}")
     trial = ids.index(ids[0] if trial is None else trial)  # from here on: the index in the batch
-    task_params = {**task_params, **tasks.parse_values(task_set or {})}
+    task_params = {**task_params, **(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
     task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]

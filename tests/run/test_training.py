@@ -39,7 +39,7 @@ def test_replay_one_trial_of_a_batch_alone():
 def test_group_in_lockstep_equals_separate_runs():
     configs = [
         _tiny(task="throw", n_steps=300),
-        _tiny(task="throw", n_steps=300, n_trials=1, overrides={"neighbourhood_q": "false"}),
+        _tiny(task="throw", n_steps=300, n_trials=1, overrides={"neighbourhood_q": False}),
     ]
     group = run.train_group(configs, progress=False)
     for config, result in zip(configs, group, strict=True):
@@ -56,7 +56,7 @@ def test_group_of_different_throw_tasks_equals_separate_runs():
         _tiny(task="throw_distance", preset="table7a", n_steps=300, task_params={"punish_low": True}),
         _tiny(task="throw_mass", n_steps=300, n_trials=3, task_params={"punish_low": True}),
         _tiny(task="throw_distance", preset="table7a", n_steps=300, task_params={"punish_low": True},
-              overrides={"neighbourhood_q": "false"}),
+              overrides={"neighbourhood_q": False}),
         _tiny(task="throw_wind", n_steps=300),
         _tiny(task="throw_wind", n_steps=300, seed=8),  # another seed: independent trials, same step
     ]
@@ -185,6 +185,9 @@ def test_every_run_setting_is_a_train_option():
     add_options(parser)
     args = parser.parse_args(["reach2", "--steps", "300", "--trial-ids", "4", "7", "--set", "alpha=0.5"])
     config = from_options(args)
-    assert {f.name for f in dataclasses.fields(RunConfig)} <= set(vars(args))
-    assert (config.n_steps, config.n_trials, config.trial_ids, config.overrides) == (300, 2, [4, 7], {"alpha": "0.5"})
+    options = {f.name for f in dataclasses.fields(RunConfig) if f.metadata["flag"]}
+    assert options == {f.name for f in dataclasses.fields(RunConfig)} - {"learner_config"}
+    assert options <= set(vars(args))
+    assert (config.n_steps, config.n_trials, config.trial_ids, config.overrides) == (300, 2, [4, 7], {"alpha": 0.5})
+    assert config.learner_config.alpha.scale == 0.5  # the typed learner config the run builds from
     assert config.preset == "table1" and config.block == 100  # the task's record and the field default

@@ -80,7 +80,7 @@ def test_points_sharing_a_task_and_seed_train_in_one_group_cut_only_for_memory()
     assert len(chunks) == 4  # 2 task parameter sets x 2 seeds, each with both alphas
     for chunk in chunks:
         assert len({(c.seed, c.task_params["radius"]) for _, _, c in chunk.items}) == 1
-        assert sorted(c.overrides["alpha"] for _, _, c in chunk.items) == ["0.5", "1"]
+        assert sorted(c.overrides["alpha"] for _, _, c in chunk.items) == [0.5, 1.0]
     assert len(plan_chunks(items, max_bytes=1.0)) == 8  # too big for one group: one point each
 
 
@@ -144,7 +144,7 @@ def test_a_failing_point_is_recorded_with_its_error_and_the_others_finish(tmp_pa
     real = run.make_learner
 
     def broken_for_alpha_07(config, task):
-        if config.overrides.get("alpha") == "0.7":
+        if config.overrides.get("alpha") == 0.7:
             raise FloatingPointError("the learner diverged")
         return real(config, task)
 
@@ -169,3 +169,44 @@ def test_importing_the_sweep_package_loads_neither_ray_nor_matplotlib():
     code = "import sys, somarm.sweep; print(sorted({'ray', 'matplotlib'} & set(sys.modules)))"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+def test_points_are_typed_run_configs_named_by_their_settings_text():
+    import hashlib
+
+    from somarm.learners.schedules import InverseDecay
+    from somarm.sweep.spec import config_key
+
+    spec = SweepSpec.around(run.RunConfig(task="reach2", overrides={"gamma": 0.5}, task_params={"radius": 0.2}),
+                            (parse_grid("decay=inv:250,inv:500"), parse_grid("task.centre_x=0.5")), n_seeds=1).check()
+    config = spec.config(spec.points()[0], 0)
+    assert config.overrides == {"gamma": 0.5, "decay": InverseDecay(250.0)}
+    assert config.task_params == {"radius": 0.2, "centre_x": 0.5}
+    assert config.learner_config.alpha.decay == InverseDecay(250.0) and config.learner_config.gamma == 0.5
+    # sweep.json and the tables keep the text form.
+    assert spec.to_dict()["overrides"] == {"gamma": "0.5"} and spec.to_dict()["task_params"] == {"radius": "0.2"}
+    assert spec.fixed_texts() == {"gamma": "0.5", "task.radius": "0.2"}
+    # A point's key is the hash of its settings as text, as sweep folders written before typed settings
+    # named it, so a rerun there finds its rows; 1 and 1.0 are one point.
+    old_form = {"task": "reach2", "learner": "somq", "preset": "table1", "overrides": {"gamma": "0.5", "decay": "inv:250"},
+                "task_params": {"radius": "0.2", "centre_x": "0.5"}, "n_trials": 1, "n_steps": spec.n_steps, "seed": 0,
+                "backend": "mujoco", "block": 100, "trial_ids": None}
+    assert config_key(config) == hashlib.sha256(json.dumps(old_form, sort_keys=True).encode()).hexdigest()[:16]
+    whole = SweepSpec(task="reach2", axes=(parse_grid("alpha=1,1.0"),)).check()
+    assert len({config_key(whole.config(point, 0)) for point in whole.points()}) == 1
+
+
+def test_a_bad_axis_value_is_named_with_its_point():
+    spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,fast"),)).check()
+    with pytest.raises(ValueError, match="^alpha=fast: could not convert string to float: 'fast'$"):
+        spec.config(spec.points()[1], 0)
+
+
+def test_a_chunk_crosses_to_a_worker_as_json_and_comes_back_the_same_configs():
+    from somarm.sweep.work import Chunk
+
+    spec = SweepSpec(task="four_goals", axes=(parse_grid("decay=inv:250,exp:0.999"),
+                                              parse_grid("task.switch_step=500")), n_steps=1000).check()
+    chunk = Chunk(tuple((i, 0, spec.config(p, 0)) for i, p in enumerate(spec.points())))
+    back = Chunk.from_dict(json.loads(json.dumps(chunk.to_dict())))
+    assert [(i, s, c.resolved()) for i, s, c in back.items] == list(chunk.items)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
@@ -130,9 +132,9 @@ def test_dm_env_episode_equals_trial_0_of_the_batch():
 
 def test_training_hands_the_learner_next_observations_and_terminal_flags():
     config = runs.RunConfig(task="reach2_obstacle", preset="obstacle", n_steps=60, n_trials=2, block=20,
-                                task_params={"step_limit": "10"})
+                                task_params={"step_limit": 10})
     discounted = runs.train(config, progress=False)
-    myopic = runs.train(runs.RunConfig(**{**config.to_dict(), "overrides": {"gamma": "0"}}),
+    myopic = runs.train(dataclasses.replace(config, overrides={"gamma": 0.0}),
                             progress=False)
     # Same observations, actions and rewards up to the first learning step; with gamma > 0 the
     # Q-values also hold the next state's value, so they differ.

@@ -10,7 +10,7 @@ from somarm.run import evaluation
 from somarm.tasks import obstacle_search
 
 
-def _greedy(gamma: str) -> dict[str, np.ndarray]:
+def _greedy(gamma: float) -> dict[str, np.ndarray]:
     config = runs.RunConfig(task="reach2_obstacle", n_trials=2, n_steps=12_000, seed=0,
                                 overrides={"gamma": gamma})
     result = runs.train(config, progress=False)
@@ -21,11 +21,11 @@ def _greedy(gamma: str) -> dict[str, np.ndarray]:
 def test_gamma_09_reaches_the_goal_in_90_percent_of_greedy_episodes_and_gamma_0_in_few():
     # Bound: the target (>= 90% from the start distribution) after 12,000 steps (a little over
     # half the preset's run); the shortest path takes 4 steps, so greedy episodes may take at most 10.
-    discounted = _greedy("0.9")
+    discounted = _greedy(0.9)
     assert (discounted["success_rate"] >= 0.9).all(), discounted
     assert (discounted["mean_length"] <= 10).all(), discounted
     # gamma = 0 learns the next reward only, which leads into the wall: at most 1 episode in 10.
-    myopic = _greedy("0")
+    myopic = _greedy(0.0)
     assert (myopic["success_rate"] <= 0.1).all(), myopic
 
 

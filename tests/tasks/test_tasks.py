@@ -259,3 +259,48 @@ def test_every_task_record_agrees_with_its_task(name):
     assert len(record.observation_labels) == task.observation_dim
     assert len(record.action_labels) == 2 and record.view in ("goals", "sweep", "fan")
     assert set(record.settable) <= set(record.fields())
+
+
+@pytest.mark.parametrize("name", tasks.names())
+def test_every_task_record_names_the_backends_its_task_takes(name):
+    backends = tasks.record(name).backends
+    assert backends and set(backends) <= set(tasks.BACKENDS)
+    for backend in tasks.BACKENDS:
+        if backend in backends:
+            assert tasks.make(name, backend=backend).backend == backend
+            assert tasks.check_backend(name, backend) == backend
+        else:
+            with pytest.raises(ValueError, match="needs the mujoco backend"):
+                tasks.make(name, backend=backend)
+            with pytest.raises(ValueError, match=f"^{name} needs the mujoco backend, got backend '{backend}'$"):
+                tasks.check_backend(name, backend)
+
+
+def test_task_parameter_text_is_read_once_into_values():
+    params = tasks.parse_params("four_goals", {"switch_step": "500", "goals_before": "[[0.3, 0.7]]"})
+    assert params == {"switch_step": 500, "goals_before": [[0.3, 0.7]]}
+    assert tasks.parse_params("reach2", {"dynamics": "actuated", "radius": "0.2"}) == {
+        "dynamics": "actuated", "radius": 0.2}
+    assert tasks.parse_params("throw", {"punish_low": "true"}) == {"punish_low": True}
+    for value in (0.2, True, 500, "actuated", [[0.3, 0.7]]):
+        assert tasks.parse_params("reach2", {"radius": tasks.format_param(value)})["radius"] == value
+
+
+@pytest.mark.parametrize("name, params, match", [
+    ("reach2", {"radius": "0.2"}, r"^task parameter radius of reach2 must be a value, got the text '0.2' "
+                                  r"\(tasks.parse_params reads text\)$"),
+    ("reach2", {"nope": 1.0}, "^unknown parameter\\(s\\) nope for task reach2; its parameters: centre_x"),
+    ("reach2", {"radius": 0.9}, "must lie inside the unit square"),
+    ("throw", {"punish_low": "yes"}, "punish_low"),
+])
+def test_typed_task_parameters_are_checked_in_one_line(name, params, match):
+    with pytest.raises(ValueError, match=match) as info:
+        tasks.check_params(name, params)
+    assert "\n" not in str(info.value)
+
+
+def test_unknown_task_parameter_text_is_refused_before_it_is_read():
+    with pytest.raises(ValueError, match="unknown parameter\\(s\\) nope for task throw"):
+        tasks.parse_params("throw", {"nope": "1"})
+    assert tasks.check_params("reach2", {"dynamics": "actuated", "radius": 0.2}) == {
+        "dynamics": "actuated", "radius": 0.2}
