@@ -323,3 +323,37 @@ def test_reproduce_keeps_the_finished_experiments_when_a_figure_cannot_be_writte
         runner.reproduce(tmp_path, quick=True, progress=False)
     claims = runner.load_claims(tmp_path)
     assert claims["complete"] is False and list(claims["experiments"]) == ["first"]
+
+
+def test_a_forced_run_killed_midway_leaves_the_earlier_run_whole(tmp_path):
+    out = tmp_path / "run"
+    assert somarm("train", "reach2", "--steps", "100", "--no-progress", "--seed", "5", "--out", str(out)).returncode == 0
+    (out / "photo.png").write_bytes(b"the user's own picture")
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != ".somarm.lock"}
+    proc = _start_training(out, "--force", "--seed", "6")
+    proc.kill()  # SIGKILL: no handler runs
+    proc.communicate(timeout=60)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != ".somarm.lock"} == before
+    config, _ = run.load(out)
+    assert config.seed == 5
+    done = somarm("train", "reach2", "--steps", "100", "--no-progress", "--no-figures", "--seed", "7", "--force",
+                  "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    assert run.load(out)[0].seed == 7 and (out / "photo.png").read_bytes() == b"the user's own picture"
+    assert not list(out.glob("*_map.png"))  # the earlier run's figures went with it
+    assert not [p for p in out.iterdir() if p.name.startswith(".somarm-") and p.name != ".somarm-manifest.json"]
+
+
+def test_a_forced_reproduction_leaves_the_users_files_in_its_folders(tmp_path):
+    out = tmp_path / "report"
+    assert somarm("reproduce", "--quick", "--only", "reach20", "--no-progress", "--out", str(out)).returncode == 0
+    (out / "figures" / "my_sketch.png").write_bytes(b"mine")
+    (out / "notes.md").write_text("mine")
+    done = somarm("reproduce", "--quick", "--only", "reach20", "--no-progress", "--force", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    assert (out / "figures" / "my_sketch.png").read_bytes() == b"mine" and (out / "notes.md").read_text() == "mine"
+    assert (out / "REPORT.md").is_file() and runner_claims(out)["complete"] is True
+
+
+def runner_claims(out: Path) -> dict:
+    return json.loads((out / "claims.json").read_text())
