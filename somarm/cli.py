@@ -8,6 +8,7 @@ import os
 import sys
 from pathlib import Path
 
+from somarm.console import guard_standard_streams
 from somarm.validation import OneLineParser, check_int
 
 __all__ = ["main"]
@@ -280,6 +281,7 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``somarm`` console script; errors end in one line and exit code 2."""
     os.environ.setdefault("MUJOCO_GL", "disable")  # no rendering here: the viewer is meshcat
+    guard_standard_streams()  # a closed pipe or a full device on stdout/stderr never costs a run
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         # bench and view take their own options: forward everything after the name.

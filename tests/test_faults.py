@@ -357,3 +357,33 @@ def test_a_forced_reproduction_leaves_the_users_files_in_its_folders(tmp_path):
 
 def runner_claims(out: Path) -> dict:
     return json.loads((out / "claims.json").read_text())
+
+
+# -- side channels: stdout and stderr that cannot be written ---------------------------------------
+def _run_files(out: Path) -> set[str]:
+    return {p.name for p in out.iterdir()} & {"learner.npz", "config.json", "curves.npz", "summary.json",
+                                              "learning_curve.png"}
+
+
+@pytest.mark.parametrize("stream", ["stdout", "stderr"])
+def test_a_full_device_on_a_standard_stream_costs_nothing(tmp_path, stream):
+    out = tmp_path / "run"
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "2000",
+                               "--out", str(out)], env=ENV, timeout=120, text=True,
+                              **{stream: full, ("stderr" if stream == "stdout" else "stdout"): subprocess.PIPE})
+    assert done.returncode == 0, done.stderr or done.stdout
+    assert "Traceback" not in (done.stderr or done.stdout or "")
+    assert len(_run_files(out)) == 5
+    run.load(out)
+
+
+def test_a_pipe_closed_after_one_line_costs_nothing(tmp_path):
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "20000",
+                             "--out", str(out)], env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    proc.stdout.readline()  # as `2>&1 | head -1`: one line read, then the pipe is closed
+    proc.stdout.close()
+    assert proc.wait(timeout=120) == 0
+    assert len(_run_files(out)) == 5
+    assert json.loads((out / "summary.json").read_text())["steps"] == 20000

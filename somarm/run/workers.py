@@ -15,6 +15,7 @@ import os
 import traceback
 from collections.abc import Callable
 
+from somarm.console import guard_standard_streams
 from somarm.run.stopping import end_with_parent, start_deaf_to_ctrl_c
 
 __all__ = ["start", "outcome"]
@@ -36,6 +37,7 @@ def start(context, target: Callable, args: tuple, *, name: str, duplex: bool, da
 
 def _main(parent: int, target: Callable, connection, *args) -> None:
     end_with_parent(parent)
+    guard_standard_streams()  # the parent's stdout/stderr may be a pipe that has closed
     target(connection, *args)
 
 
