@@ -280,7 +280,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``somarm`` console script; errors end in one line and exit code 2."""
-    os.environ.setdefault("MUJOCO_GL", "disable")  # no rendering here: the viewer is meshcat
+    # The command line never renders through MuJoCo (the viewer is meshcat), so no MUJOCO_GL of the
+    # environment can matter to it, and one that cannot load (osmesa not installed) must not stop it.
+    os.environ["MUJOCO_GL"] = "disable"
     guard_standard_streams()  # a closed pipe or a full device on stdout/stderr never costs a run
     argv = list(sys.argv[1:] if argv is None else argv)
     try:

@@ -387,3 +387,12 @@ def test_a_pipe_closed_after_one_line_costs_nothing(tmp_path):
     assert proc.wait(timeout=120) == 0
     assert len(_run_files(out)) == 5
     assert json.loads((out / "summary.json").read_text())["steps"] == 20000
+
+
+@pytest.mark.parametrize("gl", ["osmesa", "bogus"])
+def test_a_mujoco_gl_that_cannot_load_does_not_stop_the_command_line(tmp_path, gl):
+    # The command line never renders through MuJoCo; dm_control would refuse these values on import.
+    done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "100", "--no-progress",
+                           "--no-figures", "--out", str(tmp_path / "run")], capture_output=True, text=True,
+                          env={**ENV, "MUJOCO_GL": gl}, timeout=120)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
