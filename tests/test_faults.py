@@ -123,6 +123,31 @@ def test_a_learner_of_another_kind_or_task_is_refused(run_folder, tmp_path):
         run.load(throw)
 
 
+def test_a_learner_whose_settings_are_not_the_configs_is_refused_naming_the_file(run_folder, tmp_path):
+    other = _copy_run(run_folder, tmp_path / "maps")
+    config = json.loads((other / "config.json").read_text())
+    (other / "config.json").write_text(json.dumps({**config, "overrides": {"input_shape": "5x5"}}))
+    one_error_line(somarm("evaluate", str(other)), str(other / "learner.npz"), "does not belong to",
+                   "its settings differ: input_shape")
+    (other / "config.json").write_text(json.dumps({**config, "overrides": {"alpha": "nan"}}))
+    one_error_line(somarm("evaluate", str(other)), str(other / "config.json"), "alpha must be finite")
+
+
+def test_a_learned_state_of_nan_is_a_damaged_file(run_folder, tmp_path):
+    bad = _copy_run(run_folder, tmp_path / "nan")
+    with np.load(run_folder / "learner.npz", allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files}
+    arrays["q"] = np.full_like(arrays["q"], np.nan)
+    np.savez_compressed(bad / "learner.npz", **arrays)
+    one_error_line(somarm("evaluate", str(bad)), str(bad / "learner.npz"), "q holds NaN or infinite values")
+
+
+def test_a_config_nested_beyond_any_limit_is_one_line(run_folder, tmp_path):
+    deep = _copy_run(run_folder, tmp_path / "deep")
+    (deep / "config.json").write_text("[" * 100_000)
+    one_error_line(somarm("evaluate", str(deep)), str(deep / "config.json"), "nested too deeply")
+
+
 def test_evaluate_and_view_of_a_damaged_run_end_in_one_line(run_folder, tmp_path):
     bad = _copy_run(run_folder, tmp_path / "bad")
     _rewrite_meta(run_folder / "learner.npz", bad / "learner.npz", _with("streams", {}))

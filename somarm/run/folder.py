@@ -72,6 +72,7 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
       ValueError: not a run folder, or a damaged ``config.json`` or ``learner.npz``.
     """
     from somarm import learners
+    from somarm.learners import presets
 
     out = Path(out_dir)
     for name in ("config.json", "learner.npz"):
@@ -81,15 +82,27 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
         data = json.loads((out / "config.json").read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"{out / 'config.json'} is not readable JSON: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{out / 'config.json'} is not a run's config: its JSON is nested too deeply") from None
     if isinstance(data, dict):
         data.pop("somarm_version", None)
     try:
         config = RunConfig.from_dict(data).resolved()  # the same checks as `train` (a seed >= 0, ...)
+        settings = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{out / 'config.json'}: {exc}") from None
     learner = learners.load(out / "learner.npz")
     _check_learner_fits(config, learner, out / "learner.npz")
+    _check_settings_fit(settings.to_dict(), learner.config.to_dict(), out / "learner.npz")
     return config, learner
+
+
+def _check_settings_fit(wanted: dict[str, Any], held: dict[str, Any], path: Path) -> None:
+    """Refuse a learner file whose settings (map shapes, rates, ...) are not those config.json describes."""
+    differ = sorted(key for key in wanted.keys() | held.keys() if wanted.get(key) != held.get(key))
+    if differ:
+        shown = ", ".join(f"{key} {held.get(key)!r} (config: {wanted.get(key)!r})" for key in differ[:3])
+        raise ValueError(f"{path} does not belong to {path.parent / 'config.json'}: its settings differ: {shown}")
 
 
 def _check_learner_fits(config: RunConfig, learner: Learner, path: Path) -> None:
