@@ -421,3 +421,15 @@ def test_a_mujoco_gl_that_cannot_load_does_not_stop_the_command_line(tmp_path, g
                            "--no-figures", "--out", str(tmp_path / "run")], capture_output=True, text=True,
                           env={**ENV, "MUJOCO_GL": gl}, timeout=120)
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+
+
+def test_an_address_space_limit_is_a_size_check_not_a_traceback(tmp_path):
+    import resource
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (1_500_000 * 1024, resource.RLIM_INFINITY))  # `ulimit -v 1500000`
+
+    done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--trials", "60000", "--no-progress",
+                           "--out", str(tmp_path / "run")], capture_output=True, text=True, env=ENV, timeout=120,
+                          preexec_fn=limited)
+    one_error_line(done, "needs about", "of memory, more than the", "available")
