@@ -8,6 +8,7 @@ import os
 import sys
 from pathlib import Path
 
+from somarm.console import guard_standard_streams
 from somarm.validation import OneLineParser, check_int
 
 __all__ = ["main"]
@@ -46,7 +47,7 @@ def _cmd_presets(args) -> int:
 
 def _cmd_train(args) -> int:
     from somarm import run
-    from somarm.run.folder import claim
+    from somarm.run.claim import claim
 
     if args.port is not None and not 0 <= args.port <= 65535:
         raise ValueError(f"--port must be in 0..65535, got {args.port}")
@@ -93,7 +94,7 @@ def _train_into(out: Path, group, args, owner) -> int:
             extra = run.greedy_summary(result)  # the run is written whatever happens here
             if "greedy_error" in extra:
                 print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
-            run.write(result, out, figures=not args.no_figures, extra_summary=extra)
+            _write_run(result, owner, figures=not args.no_figures, extra_summary=extra)
     except KeyboardInterrupt:
         print(f"interrupted after step {result.steps_done}: results written to {out}", file=sys.stderr)
         return 130
@@ -106,6 +107,22 @@ def _train_into(out: Path, group, args, owner) -> int:
         f"greedy mean reward {mean:+.4f}; results in {out}"
     )
     return 0
+
+
+def _write_run(result, owner, **kwargs) -> None:
+    """Write a run into its claimed folder and make it the folder's run; a failed write of a forced run
+    keeps the earlier run (the new files are dropped), of a first run keeps what was written."""
+    from somarm import run
+
+    try:
+        run.write(result, owner.path, **kwargs)
+    except ValueError as exc:
+        staged = owner.staged
+        owner.finish(False)
+        if staged:
+            raise ValueError(f"{exc}; the new run was dropped and the earlier run in {owner.folder} is kept") from None
+        raise
+    owner.commit()
 
 
 def _cmd_evaluate(args) -> int:
@@ -126,7 +143,7 @@ def _cmd_evaluate(args) -> int:
 
 def _cmd_reproduce(args) -> int:
     from somarm.reproduce import runner
-    from somarm.run.folder import REPORT_FILES, claim
+    from somarm.run.claim import claim
     from somarm.run.stopping import sigterm_as_interrupt
     from somarm.validation import check_int
 
@@ -136,11 +153,19 @@ def _cmd_reproduce(args) -> int:
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
     # into an earlier one: its REPORT.md and claims.json would then mix two runs).
-    owner = claim(out, force=args.force, products=REPORT_FILES, what="a report")
+    owner = claim(out, force=args.force, what="a report")
     sigterm_as_interrupt()
     try:
-        return runner.reproduce(out, quick=args.quick, only=args.only, progress=not args.no_progress,
-                                seeds=args.seeds, backend=args.backend, jobs=args.jobs)
+        status = runner.reproduce(owner.path, quick=args.quick, only=args.only, progress=not args.no_progress,
+                                  seeds=args.seeds, backend=args.backend, jobs=args.jobs)
+        owner.commit()  # a finished report, or the part an interrupted run wrote
+        return status
+    except ValueError:  # a file could not be written: the report says which experiments it keeps
+        owner.commit()
+        raise
+    except BaseException:
+        owner.finish(False)
+        raise
     finally:
         owner.release()
 
@@ -148,8 +173,8 @@ def _cmd_reproduce(args) -> int:
 def _cmd_compare(args) -> int:
     from somarm import tasks
     from somarm.peers import compare
+    from somarm.run.claim import claim
     from somarm.run.config import parse_assignments
-    from somarm.run.folder import claim
     from somarm.run.stopping import sigterm_as_interrupt
 
     config = compare.CompareConfig(
@@ -163,10 +188,14 @@ def _cmd_compare(args) -> int:
     )
     compare.check(config)
     out = _out_folder(args.out, f"compare/{config.task}")
-    owner = claim(out, force=args.force, products=("compare.json", "compare.png"), what="a comparison")
+    owner = claim(out, force=args.force, what="a comparison")
     sigterm_as_interrupt()
     try:
-        compare.compare(config, out, progress=not args.no_progress)
+        compare.compare(config, owner.path, progress=not args.no_progress)
+        owner.commit()
+    except BaseException:
+        owner.finish(False)
+        raise
     finally:
         owner.release()
     print(f"comparison written to {out / 'compare.json'} and {out / 'compare.png'}")
@@ -251,7 +280,10 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``somarm`` console script; errors end in one line and exit code 2."""
-    os.environ.setdefault("MUJOCO_GL", "disable")  # no rendering here: the viewer is meshcat
+    # The command line never renders through MuJoCo (the viewer is meshcat), so no MUJOCO_GL of the
+    # environment can matter to it, and one that cannot load (osmesa not installed) must not stop it.
+    os.environ["MUJOCO_GL"] = "disable"
+    guard_standard_streams()  # a closed pipe or a full device on stdout/stderr never costs a run
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         # bench and view take their own options: forward everything after the name.

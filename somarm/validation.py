@@ -27,6 +27,10 @@ class OneLineParser(argparse.ArgumentParser):
     The command line's entry point turns it into its one line, ``somarm: error: ...``.
     """
 
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)  # `--seed` must never stand for `--seeds`
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str):  # noqa: D401 - argparse's signature
         raise ValueError(message)
 
@@ -82,7 +86,13 @@ def real_array(name: str, value: object) -> np.ndarray:
 
 
 def _available_memory() -> int | None:
-    """Bytes of memory a new allocation can get without swapping (Linux ``MemAvailable``), or None."""
+    """Bytes a new allocation can get: the smaller of the memory free without swapping (Linux
+    ``MemAvailable``) and what the address-space limit (``ulimit -v``, ``RLIMIT_AS``) leaves; or None."""
+    limits = [n for n in (_free_memory(), _address_space_left()) if n is not None]
+    return min(limits) if limits else None
+
+
+def _free_memory() -> int | None:
     try:
         with open("/proc/meminfo", encoding="ascii") as handle:
             for line in handle:
@@ -94,6 +104,21 @@ def _available_memory() -> int | None:
         return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     except (AttributeError, ValueError, OSError):
         return None
+
+
+def _address_space_left() -> int | None:
+    """``RLIMIT_AS`` less this process's address space now (``/proc/self/statm``); None without a limit."""
+    try:
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if limit == resource.RLIM_INFINITY:
+            return None
+        with open("/proc/self/statm", encoding="ascii") as handle:
+            used = int(handle.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (ImportError, OSError, ValueError, IndexError):
+        return None
+    return max(0, limit - used)
 
 
 def check_memory(what: str, n_bytes: float, hint: str) -> None:

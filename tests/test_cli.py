@@ -167,3 +167,15 @@ def test_a_run_stopped_before_one_block_writes_valid_json(tmp_path):
 
     summary = json.loads((tmp_path / "summary.json").read_text(), parse_constant=no_nan)
     assert summary["final_mean_reward"] is None and summary["final_window_steps"] == 0
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["train", "reach2", "--step", "10"], "--step"),
+    (["reproduce", "--quick", "--seed", "3"], "--seed"),
+    (["sweep", "reach2", "--grid", "alpha=0.5", "--step", "10"], "--step"),
+    (["bench", "learner", "--trial", "3"], "--trial"),
+])
+def test_an_abbreviated_option_is_refused_not_expanded(argv, flag, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unrecognized arguments" in err[0] and flag in err[0], err

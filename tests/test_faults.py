@@ -123,6 +123,31 @@ def test_a_learner_of_another_kind_or_task_is_refused(run_folder, tmp_path):
         run.load(throw)
 
 
+def test_a_learner_whose_settings_are_not_the_configs_is_refused_naming_the_file(run_folder, tmp_path):
+    other = _copy_run(run_folder, tmp_path / "maps")
+    config = json.loads((other / "config.json").read_text())
+    (other / "config.json").write_text(json.dumps({**config, "overrides": {"input_shape": "5x5"}}))
+    one_error_line(somarm("evaluate", str(other)), str(other / "learner.npz"), "does not belong to",
+                   "its settings differ: input_shape")
+    (other / "config.json").write_text(json.dumps({**config, "overrides": {"alpha": "nan"}}))
+    one_error_line(somarm("evaluate", str(other)), str(other / "config.json"), "alpha must be finite")
+
+
+def test_a_learned_state_of_nan_is_a_damaged_file(run_folder, tmp_path):
+    bad = _copy_run(run_folder, tmp_path / "nan")
+    with np.load(run_folder / "learner.npz", allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files}
+    arrays["q"] = np.full_like(arrays["q"], np.nan)
+    np.savez_compressed(bad / "learner.npz", **arrays)
+    one_error_line(somarm("evaluate", str(bad)), str(bad / "learner.npz"), "q holds NaN or infinite values")
+
+
+def test_a_config_nested_beyond_any_limit_is_one_line(run_folder, tmp_path):
+    deep = _copy_run(run_folder, tmp_path / "deep")
+    (deep / "config.json").write_text("[" * 100_000)
+    one_error_line(somarm("evaluate", str(deep)), str(deep / "config.json"), "nested too deeply")
+
+
 def test_evaluate_and_view_of_a_damaged_run_end_in_one_line(run_folder, tmp_path):
     bad = _copy_run(run_folder, tmp_path / "bad")
     _rewrite_meta(run_folder / "learner.npz", bad / "learner.npz", _with("streams", {}))
@@ -323,3 +348,88 @@ def test_reproduce_keeps_the_finished_experiments_when_a_figure_cannot_be_writte
         runner.reproduce(tmp_path, quick=True, progress=False)
     claims = runner.load_claims(tmp_path)
     assert claims["complete"] is False and list(claims["experiments"]) == ["first"]
+
+
+def test_a_forced_run_killed_midway_leaves_the_earlier_run_whole(tmp_path):
+    out = tmp_path / "run"
+    assert somarm("train", "reach2", "--steps", "100", "--no-progress", "--seed", "5", "--out", str(out)).returncode == 0
+    (out / "photo.png").write_bytes(b"the user's own picture")
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != ".somarm.lock"}
+    proc = _start_training(out, "--force", "--seed", "6")
+    proc.kill()  # SIGKILL: no handler runs
+    proc.communicate(timeout=60)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != ".somarm.lock"} == before
+    config, _ = run.load(out)
+    assert config.seed == 5
+    done = somarm("train", "reach2", "--steps", "100", "--no-progress", "--no-figures", "--seed", "7", "--force",
+                  "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    assert run.load(out)[0].seed == 7 and (out / "photo.png").read_bytes() == b"the user's own picture"
+    assert not list(out.glob("*_map.png"))  # the earlier run's figures went with it
+    assert not [p for p in out.iterdir() if p.name.startswith(".somarm-") and p.name != ".somarm-manifest.json"]
+
+
+def test_a_forced_reproduction_leaves_the_users_files_in_its_folders(tmp_path):
+    out = tmp_path / "report"
+    assert somarm("reproduce", "--quick", "--only", "reach20", "--no-progress", "--out", str(out)).returncode == 0
+    (out / "figures" / "my_sketch.png").write_bytes(b"mine")
+    (out / "notes.md").write_text("mine")
+    done = somarm("reproduce", "--quick", "--only", "reach20", "--no-progress", "--force", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    assert (out / "figures" / "my_sketch.png").read_bytes() == b"mine" and (out / "notes.md").read_text() == "mine"
+    assert (out / "REPORT.md").is_file() and runner_claims(out)["complete"] is True
+
+
+def runner_claims(out: Path) -> dict:
+    return json.loads((out / "claims.json").read_text())
+
+
+# -- side channels: stdout and stderr that cannot be written ---------------------------------------
+def _run_files(out: Path) -> set[str]:
+    return {p.name for p in out.iterdir()} & {"learner.npz", "config.json", "curves.npz", "summary.json",
+                                              "learning_curve.png"}
+
+
+@pytest.mark.parametrize("stream", ["stdout", "stderr"])
+def test_a_full_device_on_a_standard_stream_costs_nothing(tmp_path, stream):
+    out = tmp_path / "run"
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "2000",
+                               "--out", str(out)], env=ENV, timeout=120, text=True,
+                              **{stream: full, ("stderr" if stream == "stdout" else "stdout"): subprocess.PIPE})
+    assert done.returncode == 0, done.stderr or done.stdout
+    assert "Traceback" not in (done.stderr or done.stdout or "")
+    assert len(_run_files(out)) == 5
+    run.load(out)
+
+
+def test_a_pipe_closed_after_one_line_costs_nothing(tmp_path):
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "20000",
+                             "--out", str(out)], env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    proc.stdout.readline()  # as `2>&1 | head -1`: one line read, then the pipe is closed
+    proc.stdout.close()
+    assert proc.wait(timeout=120) == 0
+    assert len(_run_files(out)) == 5
+    assert json.loads((out / "summary.json").read_text())["steps"] == 20000
+
+
+@pytest.mark.parametrize("gl", ["osmesa", "bogus"])
+def test_a_mujoco_gl_that_cannot_load_does_not_stop_the_command_line(tmp_path, gl):
+    # The command line never renders through MuJoCo; dm_control would refuse these values on import.
+    done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "100", "--no-progress",
+                           "--no-figures", "--out", str(tmp_path / "run")], capture_output=True, text=True,
+                          env={**ENV, "MUJOCO_GL": gl}, timeout=120)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+
+
+def test_an_address_space_limit_is_a_size_check_not_a_traceback(tmp_path):
+    import resource
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (1_500_000 * 1024, resource.RLIM_INFINITY))  # `ulimit -v 1500000`
+
+    done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--trials", "60000", "--no-progress",
+                           "--out", str(tmp_path / "run")], capture_output=True, text=True, env=ENV, timeout=120,
+                          preexec_fn=limited)
+    one_error_line(done, "needs about", "of memory, more than the", "available")

@@ -75,7 +75,8 @@ def measure(task: str, *, n_envs: int, steps: int, repeats: int) -> dict[str, fl
 
 def main(argv: list[str] | None = None) -> int:
     """Print the figures; ``--quick`` for a smoke run."""
-    parser = argparse.ArgumentParser(prog="somarm bench adapters", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="somarm bench adapters", description=__doc__.splitlines()[0],
+                                     allow_abbrev=False)
     parser.add_argument("--task", default="reach2", help="task (default reach2)")
     parser.add_argument("--envs", type=int, default=100, help="envs (trials) stepped together (default 100)")
     parser.add_argument("--steps", type=int, help="steps per timing (default 300, quick 30)")

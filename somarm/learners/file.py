@@ -130,6 +130,9 @@ def _restore(cls: type, meta: dict[str, Any], arrays: dict[str, np.ndarray], pat
         target = getattr(learner, name)
         if arrays[name].shape != target.shape:
             raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")
+        if name in cls._STATE_ARRAYS and arrays[name].dtype.kind == "f" and not np.isfinite(arrays[name]).all():
+            raise ValueError(f"{path} is a damaged learner file: {name} holds NaN or infinite values "
+                             "(a learned state is finite)")
         target[...] = arrays[name]
     learner.t, learner._pending = int(meta["t"]), bool(meta["pending"])
     learner._streams.set_state({**meta["streams"], "buffer": arrays["stream_buffer"]})

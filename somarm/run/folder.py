@@ -1,22 +1,11 @@
-"""The run folder, written and read here alone; a folder is owned by one process at a time.
-
-``write`` and ``load`` are the run folder's format (``learner.npz``, ``config.json``,
-``curves.npz``, ``summary.json`` and the figures).
-
-``claim`` locks the folder (``fcntl.flock`` on ``.somarm.lock`` inside it, released by the
-kernel when the process ends, even by SIGKILL), so a second writer is refused at once instead
-of mixing its files with the first one's. A folder that already holds files is refused unless
-``force``; a forced run first removes the files such a run writes (so no figure of the old run
-survives next to the new ones) and leaves anything else alone.
+"""The run folder, written and read here alone: ``learner.npz``, ``config.json``, ``curves.npz``,
+``summary.json`` and the figures. Who may write a folder, and when results replace earlier ones, is
+``somarm.run.claim``'s.
 """
 
 from __future__ import annotations
 
-import fcntl
 import json
-import os
-import shutil
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -30,92 +19,7 @@ from somarm.run.config import RunConfig
 from somarm.run.group import RunResult
 from somarm.run.summary import summary
 
-__all__ = ["LOCK_NAME", "RUN_FILES", "REPORT_FILES", "FolderClaim", "claim", "write", "load", "task_for"]
-
-LOCK_NAME = ".somarm.lock"
-#: What a run folder holds (``run.write``): removed by a forced run before it starts.
-RUN_FILES = ("config.json", "curves.npz", "learner.npz", "summary.json", "*.png")
-#: What a reproduction folder holds (``somarm reproduce``).
-REPORT_FILES = ("REPORT.md", "claims.json", "figures")
-
-
-@dataclass
-class FolderClaim:
-    """A locked folder. ``release`` (or process exit) lets the next writer in.
-
-    Attributes:
-      folder: the folder.
-      created: True if ``claim`` made it (so a caller that gives up can remove it again).
-    """
-
-    folder: Path
-    created: bool
-    _fd: int | None = None
-
-    def release(self, *, remove_if_unused: bool = False) -> None:
-        """Unlock; with ``remove_if_unused``, also remove a folder this claim made that holds nothing else."""
-        if self._fd is not None:
-            os.close(self._fd)  # closing the descriptor releases the flock
-            self._fd = None
-        if remove_if_unused and self.created:
-            try:
-                (self.folder / LOCK_NAME).unlink(missing_ok=True)
-                self.folder.rmdir()
-            except OSError:  # something else was put there meanwhile: leave it
-                pass
-
-
-def claim(folder: Path, *, force: bool = False, products: tuple[str, ...] = RUN_FILES, flag: str = "--out",
-          what: str = "a run") -> FolderClaim:
-    """Lock ``folder`` for this process and make sure it holds no earlier results.
-
-    Args:
-      folder: the output folder (made, with its parents, if missing).
-      force: replace earlier results: remove the files matching ``products`` first.
-      products: glob patterns of what such a folder holds (``RUN_FILES``, ``REPORT_FILES``).
-      flag: the option that named the folder, for messages.
-      what: what the folder holds, for messages (``a run``, ``a report``).
-
-    Returns:
-      The claim; keep it until the results are written.
-
-    Raises:
-      ValueError: the folder cannot be made or written, another process holds it, or it holds
-        files and ``force`` is false (one line naming the folder and what to do).
-    """
-    created = not folder.exists()
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError as exc:
-        raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
-        os.close(fd)
-        raise ValueError(f"{flag} {folder} is being written by another somarm process (pid {owner}); "
-                         f"wait for it to finish, or give another {flag}") from None
-    held = FolderClaim(folder, created, fd)
-    try:
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-        existing = sorted(p.name for p in folder.iterdir() if p.name != LOCK_NAME)
-        if existing and not force:
-            shown = ", ".join(existing[:4]) + (", ..." if len(existing) > 4 else "")
-            raise ValueError(f"{flag} {folder} is not empty ({shown}); give --force to replace {what} "
-                             f"there, or another {flag}")
-        if force:
-            for pattern in products:
-                for path in folder.glob(pattern):
-                    shutil.rmtree(path) if path.is_dir() else path.unlink()
-    except OSError as exc:
-        held.release()
-        raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
-    except ValueError:
-        held.release()
-        raise
-    return held
+__all__ = ["write", "load", "task_for"]
 
 
 def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
@@ -168,6 +72,7 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
       ValueError: not a run folder, or a damaged ``config.json`` or ``learner.npz``.
     """
     from somarm import learners
+    from somarm.learners import presets
 
     out = Path(out_dir)
     for name in ("config.json", "learner.npz"):
@@ -177,15 +82,27 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
         data = json.loads((out / "config.json").read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"{out / 'config.json'} is not readable JSON: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{out / 'config.json'} is not a run's config: its JSON is nested too deeply") from None
     if isinstance(data, dict):
         data.pop("somarm_version", None)
     try:
         config = RunConfig.from_dict(data).resolved()  # the same checks as `train` (a seed >= 0, ...)
+        settings = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{out / 'config.json'}: {exc}") from None
     learner = learners.load(out / "learner.npz")
     _check_learner_fits(config, learner, out / "learner.npz")
+    _check_settings_fit(settings.to_dict(), learner.config.to_dict(), out / "learner.npz")
     return config, learner
+
+
+def _check_settings_fit(wanted: dict[str, Any], held: dict[str, Any], path: Path) -> None:
+    """Refuse a learner file whose settings (map shapes, rates, ...) are not those config.json describes."""
+    differ = sorted(key for key in wanted.keys() | held.keys() if wanted.get(key) != held.get(key))
+    if differ:
+        shown = ", ".join(f"{key} {held.get(key)!r} (config: {wanted.get(key)!r})" for key in differ[:3])
+        raise ValueError(f"{path} does not belong to {path.parent / 'config.json'}: its settings differ: {shown}")
 
 
 def _check_learner_fits(config: RunConfig, learner: Learner, path: Path) -> None:

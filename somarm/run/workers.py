@@ -12,9 +12,11 @@
 from __future__ import annotations
 
 import os
+import signal
 import traceback
 from collections.abc import Callable
 
+from somarm.console import guard_standard_streams
 from somarm.run.stopping import end_with_parent, start_deaf_to_ctrl_c
 
 __all__ = ["start", "outcome"]
@@ -36,7 +38,16 @@ def start(context, target: Callable, args: tuple, *, name: str, duplex: bool, da
 
 def _main(parent: int, target: Callable, connection, *args) -> None:
     end_with_parent(parent)
-    target(connection, *args)
+    guard_standard_streams()  # the parent's stdout/stderr may be a pipe that has closed
+    try:
+        target(connection, *args)
+    except (KeyboardInterrupt, OSError, EOFError):
+        pass  # stopped, or the parent is gone while answering: there is nobody to tell
+    finally:
+        # The work is over: a stop from now on (the parent's death during this process's teardown)
+        # ends it quietly instead of raising KeyboardInterrupt inside the interpreter's shutdown.
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def outcome(work: Callable[[], object]) -> tuple[str, object]:

@@ -147,7 +147,7 @@ class LoopbackBridge(ZMQWebSocketBridge):
 
 def main(argv: list[str] | None = None) -> int:
     """Start the bridge, write its addresses to the ready file, serve until stopped."""
-    parser = argparse.ArgumentParser(prog="somarm.viewer._bridge")
+    parser = argparse.ArgumentParser(prog="somarm.viewer._bridge", allow_abbrev=False)
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=0)
     parser.add_argument("--ready-file", required=True)

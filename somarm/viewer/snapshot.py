@@ -52,7 +52,8 @@ def screenshot_url(url: str, out: str | Path, *, wait_s: float = 1.0, size: tupl
 
 def main(argv: list[str] | None = None) -> int:
     """Serve a session (as ``somarm view`` would), screenshot it, stop the server."""
-    parser = argparse.ArgumentParser(prog="python -m somarm.viewer.snapshot", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m somarm.viewer.snapshot", description=__doc__.split("\n")[0],
+                                     allow_abbrev=False)
     parser.add_argument("task")
     parser.add_argument("--run", default=None)
     parser.add_argument("--out", required=True)

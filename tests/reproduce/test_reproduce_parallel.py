@@ -117,7 +117,30 @@ def test_a_killed_parent_leaves_no_worker_running(tmp_path):
                                                    text=True).stdout.split())]
         assert len(family) >= 2, "the worker shares Fig. 25's group with a process of its own"
         left = survivors_of_a_killed_parent(proc, family, 45)  # each stops between two steps
+        err = proc.stderr.read()  # the workers share the parent's stderr; closed once they end
     finally:
         proc.kill()
     assert not left, f"process(es) {left} still running after the parent died"
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
 
+
+
+def test_workers_of_a_killed_parent_end_without_a_traceback(tmp_path):
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "somarm.cli", "reproduce", "--quick", "--jobs", "2", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_ENV,
+    )
+    try:
+        workers, line = set(), ""
+        deadline = time.monotonic() + 60
+        while len(workers) < 2 and time.monotonic() < deadline:  # both workers busy
+            line = proc.stderr.readline()
+            if started := re.match(r"\w+: started in process (\d+)", line):
+                workers.add(int(started.group(1)))
+        assert len(workers) == 2, line
+        left = survivors_of_a_killed_parent(proc, sorted(workers), 45)
+        err = proc.stderr.read()
+    finally:
+        proc.kill()
+    assert not left, f"process(es) {left} still running after the parent died"
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err

@@ -1,0 +1,218 @@
+"""A folder of results owned by one process at a time, replaced only when the new results are complete.
+
+``claim`` locks the folder (``fcntl.flock`` on ``.somarm.lock`` inside it, released by the kernel
+when the process ends, even by SIGKILL), so a second writer is refused at once instead of mixing
+its files with the first one's. A folder that already holds files is refused unless ``force``.
+
+What a run wrote is listed in the folder's manifest (``.somarm-manifest.json``), and nothing
+else is ever removed: a user's own files in the folder stay. A forced run writes into a staging
+folder inside it (``.somarm-new``) and ``commit`` swaps the new files in at the end: the earlier
+run's files (those its manifest lists) are moved aside, the new ones moved in, and the new
+manifest put in place, which is the moment the new run becomes the folder's run. A process killed
+before that moment leaves the earlier run as it was; the next ``claim`` finds the leftovers and
+finishes or undoes the swap.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["LOCK_NAME", "MANIFEST_NAME", "FolderClaim", "claim"]
+
+LOCK_NAME = ".somarm.lock"
+MANIFEST_NAME = ".somarm-manifest.json"
+_STAGING = ".somarm-new"
+_ASIDE = ".somarm-old"
+_OURS = {LOCK_NAME, MANIFEST_NAME, _STAGING, _ASIDE}
+
+
+def _listed(folder: Path) -> list[str]:
+    """The files a folder's manifest lists (relative paths), or none where it has no readable one."""
+    try:
+        data = json.loads((folder / MANIFEST_NAME).read_text())
+        files = data["files"] if isinstance(data, dict) else None
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, RecursionError):
+        return []
+    if not isinstance(files, list):
+        return []
+    return [f for f in files if isinstance(f, str) and f and not f.startswith(("/", ".somarm")) and ".." not in f]
+
+
+def _files_under(root: Path) -> list[str]:
+    """Every file under ``root`` (relative paths, sorted), leaving out the folder's own bookkeeping."""
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*")
+                  if p.is_file() and p.relative_to(root).parts[0] not in _OURS)
+
+
+def _write_manifest(path: Path, files: list[str]) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps({"files": files}, indent=1) + "\n")
+    os.replace(tmp, path)
+
+
+def _move(src: Path, dst: Path) -> None:
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    os.replace(src, dst)
+
+
+def _prune_empty(folder: Path, files: list[str]) -> None:
+    """Remove the folders that held ``files`` where they are now empty (never ``folder`` itself)."""
+    parents = sorted({p for f in files for p in Path(f).parents if p != Path(".")}, key=lambda p: -len(p.parts))
+    for parent in parents:
+        try:
+            (folder / parent).rmdir()
+        except OSError:  # not empty (a user's file is there) or gone
+            pass
+
+
+def _recover(folder: Path) -> None:
+    """Finish or undo a swap that a killed process left, and drop an unfinished staging folder."""
+    aside, staging = folder / _ASIDE, folder / _STAGING
+    if aside.is_dir():
+        if (staging / MANIFEST_NAME).is_file():  # the new manifest never moved in: undo
+            for name in _listed(staging):
+                (folder / name).unlink(missing_ok=True)
+            for name in _files_under(aside):
+                _move(aside / name, folder / name)
+        shutil.rmtree(aside)
+    if staging.is_dir():
+        shutil.rmtree(staging)
+
+
+@dataclass
+class FolderClaim:
+    """A locked folder. Write into ``path``, then ``commit``; ``release`` (or process exit) unlocks.
+
+    Attributes:
+      folder: the folder.
+      created: True if ``claim`` made it (so a caller that gives up can remove it again).
+      staged: True if the results go to a staging folder first (a forced run over earlier results).
+    """
+
+    folder: Path
+    created: bool
+    staged: bool = False
+    _fd: int | None = None
+
+    @property
+    def path(self) -> Path:
+        """Where this run writes its files until ``commit``."""
+        return self.folder / _STAGING if self.staged else self.folder
+
+    def commit(self) -> None:
+        """Make what was written in ``path`` the folder's results, and list it in the manifest.
+
+        For a staged run the earlier run's listed files are replaced; other files are left alone.
+
+        Raises:
+          ValueError: the swap could not be done (the earlier run is then put back).
+        """
+        if not self.staged:
+            try:
+                _write_manifest(self.folder / MANIFEST_NAME, _files_under(self.folder))
+            except OSError:  # a full disk: unlisted, these files are only ever replaced by name, never removed
+                (self.folder / (MANIFEST_NAME + ".tmp")).unlink(missing_ok=True)
+            return
+        staging, aside = self.path, self.folder / _ASIDE
+        new = _files_under(staging)
+        try:
+            _write_manifest(staging / MANIFEST_NAME, new)
+            # The earlier run's files, and any file of the same name as a new one (written by an
+            # older somarm, which kept no manifest): moved aside, so that a failed swap can undo.
+            old = sorted({f for f in _listed(self.folder) + new if (self.folder / f).is_file()})
+            for name in old:
+                _move(self.folder / name, aside / name)
+            for name in new:
+                _move(staging / name, self.folder / name)
+            os.replace(staging / MANIFEST_NAME, self.folder / MANIFEST_NAME)  # the new run is the folder's
+        except OSError as exc:
+            _recover(self.folder)
+            raise ValueError(f"cannot put the new results in {self.folder}: {exc.strerror or exc}; "
+                             "the earlier results are kept") from None
+        shutil.rmtree(aside, ignore_errors=True)
+        shutil.rmtree(staging, ignore_errors=True)
+        _prune_empty(self.folder, [f for f in old if f not in new])
+        self.staged = False
+
+    def discard(self) -> None:
+        """Drop what a staged run wrote (the earlier results stay); nothing to do for an unstaged one."""
+        if self.staged:
+            shutil.rmtree(self.path, ignore_errors=True)
+
+    def finish(self, complete: bool) -> None:
+        """``commit`` complete results; of incomplete ones, keep the earlier run if there is one
+        (``discard``), else list what was written, so that a later forced run may replace it."""
+        if complete or not self.staged:
+            self.commit()
+        else:
+            self.discard()
+
+    def release(self, *, remove_if_unused: bool = False) -> None:
+        """Unlock; with ``remove_if_unused``, also remove a folder this claim made that holds nothing else."""
+        if self._fd is not None:
+            os.close(self._fd)  # closing the descriptor releases the flock
+            self._fd = None
+        if remove_if_unused and self.created:
+            try:
+                (self.folder / LOCK_NAME).unlink(missing_ok=True)
+                self.folder.rmdir()
+            except OSError:  # something else was put there meanwhile: leave it
+                pass
+
+
+def claim(folder: Path, *, force: bool = False, flag: str = "--out", what: str = "a run") -> FolderClaim:
+    """Lock ``folder`` for this process; with ``force`` over earlier results, stage the new ones.
+
+    Args:
+      folder: the output folder (made, with its parents, if missing).
+      force: replace earlier results (at ``commit``, and only the files somarm wrote there).
+      flag: the option that named the folder, for messages.
+      what: what the folder holds, for messages (``a run``, ``a report``).
+
+    Returns:
+      The claim; write into its ``path``, ``commit`` when the results are complete, keep it until then.
+
+    Raises:
+      ValueError: the folder cannot be made or written, is a file, another process holds it, or it
+        holds files and ``force`` is false (one line naming the folder and what to do).
+    """
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"{flag} {folder} is a file; give a folder (new, or holding {what})")
+    created = not folder.exists()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+        os.close(fd)
+        raise ValueError(f"{flag} {folder} is being written by another somarm process (pid {owner}); "
+                         f"wait for it to finish, or give another {flag}") from None
+    held = FolderClaim(folder, created, _fd=fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        _recover(folder)
+        existing = sorted(p.name for p in folder.iterdir() if p.name not in _OURS)
+        if existing and not force:
+            shown = ", ".join(existing[:4]) + (", ..." if len(existing) > 4 else "")
+            raise ValueError(f"{flag} {folder} is not empty ({shown}); give --force to replace {what} "
+                             f"there, or another {flag}")
+        if existing:
+            held.staged = True
+            held.path.mkdir()  # the new results wait here until commit
+    except OSError as exc:
+        held.release()
+        raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
+    except ValueError:
+        held.release()
+        raise
+    return held
