@@ -72,7 +72,6 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
       ValueError: not a run folder, or a damaged ``config.json`` or ``learner.npz``.
     """
     from somarm import learners
-    from somarm.learners import presets
 
     out = Path(out_dir)
     for name in ("config.json", "learner.npz"):
@@ -88,12 +87,11 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
         data.pop("somarm_version", None)
     try:
         config = RunConfig.from_dict(data).resolved()  # the same checks as `train` (a seed >= 0, ...)
-        settings = presets.config_for(config.learner, config.preset).with_overrides(config.overrides)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{out / 'config.json'}: {exc}") from None
     learner = learners.load(out / "learner.npz")
     _check_learner_fits(config, learner, out / "learner.npz")
-    _check_settings_fit(settings.to_dict(), learner.config.to_dict(), out / "learner.npz")
+    _check_settings_fit(config.learner_config.to_dict(), learner.config.to_dict(), out / "learner.npz")
     return config, learner
 
 
