@@ -213,7 +213,7 @@ def _table7(name: str) -> Preset:
 
 def _plus(base: Preset, description: str, changes: dict[str, object], why: tuple[str, ...], *,
           drop: int = 0) -> Preset:
-    """A paper table with changed settings, for the runs beyond the paper (issue 11); named ``<table>+``.
+    """A paper table with changed settings, for the runs beyond the paper; named ``<table>+``.
 
     ``drop``: how many of the table's own choices (the first ones) no longer apply.
     """

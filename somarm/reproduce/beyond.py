@@ -1,4 +1,4 @@
-"""Beyond the paper: the interpolated response (issue 11) beside the paper's winner response.
+"""Beyond the paper: the interpolated response beside the paper's winner response.
 
 Not one of the paper's experiments: its section 6 only suggests "a truly continuous response by
 interpolating over the Q-table". Both responses learn side by side (in lockstep, same
@@ -20,7 +20,7 @@ from somarm.run import RunConfig, RunResult, evaluation
 
 __all__ = ["TARGETS", "Key", "train", "unit_errors", "response_profiles", "beyond"]
 
-#: The issue's targets for the interpolated response: greedy error at most this (task: bound, preset).
+#: This project's targets for the interpolated response: greedy error at most this (task: bound, preset).
 TARGETS = {"reach2": (0.012, "table1+"), "throw_distance": (0.15, "table5+")}
 #: "Not worse than the winner response": the interpolated mean greedy error within 10% of the winner's.
 _NOT_WORSE = 1.10
@@ -132,7 +132,7 @@ def _target_claims(greedy) -> list[Claim]:
         gap = interpolated.mean() - bound
         measured += "." if gap <= 0 else f"; misses the target by {fmt(gap, 2)}."
         measured += " " + _outliers(interpolated)
-        claims.append(Claim(f"Beyond the paper (issue 11 target): {task} greedy error <= {bound} with "
+        claims.append(Claim(f"Beyond the paper (this project's target): {task} greedy error <= {bound} with "
                             "the interpolated response.", measured, bool(interpolated.mean() <= bound),
                             f"mean greedy error over trials <= {bound} ({preset})"))
     return claims
@@ -144,7 +144,7 @@ def _not_worse_claims(greedy) -> list[Claim]:
         for name in sorted({p for (t, p, _) in greedy if t == task}):
             interpolated, winner = greedy[(task, name, "interpolated")], greedy[(task, name, "winner")]
             claims.append(Claim(
-                f"Beyond the paper (issue 11 target): on {task} the interpolated response is not worse than the "
+                f"Beyond the paper (this project's target): on {task} the interpolated response is not worse than the "
                 "winner response.",
                 f"{name}: interpolated {fmt(interpolated.mean(), 4)} (sd {_sd(interpolated.std())}), winner "
                 f"{fmt(winner.mean(), 4)} (sd {_sd(winner.std())}).",
@@ -187,7 +187,7 @@ def _diagnosis(results, greedy) -> list[str]:
 def beyond(ctx: Context) -> Section:
     """Train and compare both responses on the four tasks; figures, targets and notes."""
     results, greedy = train(ctx)
-    section = Section("beyond", "Beyond the paper: a truly continuous SOM-Q response (issue 11)")
+    section = Section("beyond", "Beyond the paper: a truly continuous SOM-Q response")
     section.choices += preset_choices("table1+", "table5+")
     section.choices += [
         "Greedy error: mean distance (reach, four_goals) or |landing - target| (throw_distance) of the greedy "

@@ -58,7 +58,7 @@ def _greedy_bars(ctx: Context, greedy: dict, targets: dict):
     ax.set_xticks(x, [f"{t}\n{p}\n{r}" for t, p, r in keys], fontsize=7)
     ax.set(yscale="log", ylabel="greedy error (bar: mean over trials)",
            title="Greedy error: winner (blue) and interpolated (orange) responses; dots: trials; "
-                 "dotted: the issue's targets")
+                 "dotted: the targets")
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3, axis="y", which="both")
     return save(ctx, fig, "beyond_greedy_error.png")

@@ -41,7 +41,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "neighbourhood_q": neighbourhood_q.neighbourhood_q,
     "more_inputs": more_inputs.more_inputs,
     "delayed_reward": delayed.delayed_reward,
-    # Not the paper's: its suggested continuous response (issue 11), apart from the paper's claims.
+    # Not the paper's: the continuous response its section 6 suggests, apart from the paper's claims.
     "beyond": beyond.beyond,
 }
 
