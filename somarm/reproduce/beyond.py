@@ -10,6 +10,8 @@ and of the settings show apart. The figures are drawn in ``beyond_figures``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from somarm.learners.somq import RESPONSES
@@ -18,7 +20,7 @@ from somarm.reproduce.common import Context, final_error, fmt, preset_choices, r
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
-__all__ = ["TARGETS", "Key", "train", "unit_errors", "response_profiles", "beyond"]
+__all__ = ["TARGETS", "Key", "Trained", "train", "unit_errors", "response_profiles", "beyond"]
 
 #: This project's targets for the interpolated response: greedy error at most this (task: bound, preset).
 TARGETS = {"reach2": (0.012, "table1+"), "throw_distance": (0.15, "table5+")}
@@ -38,13 +40,19 @@ def _plan(ctx: Context) -> list[tuple[str, tuple[str, ...], int, int]]:
     ]
 
 
-def train(ctx: Context) -> tuple[dict[Key, RunResult], dict[Key, np.ndarray]]:
-    """Both responses under each preset of the plan, a task's runs in lockstep; each run's greedy error.
+@dataclass(frozen=True)
+class Trained:
+    """Every run of the plan and what its greedy response does, keyed by (task, preset, response)."""
 
-    Returns:
-      The runs and their greedy errors ``(n_trials,)`` on fresh observations (1000 for the arms,
-      500 for the throws; 100 when quick), both keyed by (task, preset, response).
-    """
+    results: dict[Key, RunResult]
+    greedy: dict[Key, np.ndarray]  #: ``(n_trials,)`` greedy error on fresh observations
+    own: dict[Key, tuple[np.ndarray, np.ndarray]]  #: the targets' runs: ``unit_errors``
+    profiles: dict  #: ``response_profiles``'s answer
+
+
+def _train_runs(ctx: Context) -> tuple[dict[Key, RunResult], dict[Key, np.ndarray]]:
+    """Both responses under each preset of the plan (a task's runs in lockstep); each run's greedy
+    error on fresh observations (1000 for the arms, 500 for the throws; 100 when quick)."""
     results, greedy = {}, {}
     for task, preset_names, n_trials, n_steps in _plan(ctx):
         configs = [
@@ -63,8 +71,33 @@ def train(ctx: Context) -> tuple[dict[Key, RunResult], dict[Key, np.ndarray]]:
     return results, greedy
 
 
+def train(ctx: Context) -> Trained:
+    """Train every run of the plan and evaluate its greedy response (see ``Trained``).
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      The runs and their evaluations (``Trained``).
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
+    results, greedy = _train_runs(ctx)
+    own = {key: unit_errors(result) for key, result in results.items() if key[0] in TARGETS}
+    return Trained(results, greedy, own, response_profiles(results, greedy, ctx.quick))
+
+
 def unit_errors(result: RunResult) -> tuple[np.ndarray, np.ndarray]:
-    """Per trial: mean error of each input unit's own greedy action at the unit itself, distinct greedy units."""
+    """Per trial ``(n_trials,)``: the mean error of each input unit's own greedy action at the unit
+    itself, and how many distinct action units are greedy somewhere.
+
+    Args:
+      result: a run of the SOM-Q learner.
+
+    Returns:
+      ``(own, distinct)``, each ``(n_trials,)``.
+    """
     learner, task = result.learner, result.task
     winners, units = learner.greedy_units(learner.input_weights)
     index = np.arange(learner.n_trials)[:, None]
@@ -78,6 +111,10 @@ def response_profiles(results: dict[Key, RunResult], greedy: dict[Key, np.ndarra
     """The targets' typical trials under each response: reach2's greedy fingertip error around the
     goal circle (1441 goal angles, 181 when quick) and throw_distance's landing point against the
     target (361 targets from 0 to 9, 46 when quick).
+
+    Args:
+      results, greedy: ``_train_runs``'s answer.
+      quick: the shorter sweeps.
 
     Returns:
       ``{"reach2": (trial, angles, {response: errors}), "throw_distance": (trial, targets,
@@ -167,26 +204,35 @@ def _outliers(errors: np.ndarray) -> str:
             f"the other {rest.size} trials average {fmt(rest.mean(), 4)} (max {fmt(rest.max(), 4)}).")
 
 
-def _diagnosis(results, greedy) -> list[str]:
+def _diagnosis(trained: Trained) -> list[str]:
     """Why a target is missed: how far the action units themselves sit from their input units' solutions."""
     lines = ["", "What limits the interpolated response (the blend can be no better than the actions it blends): "
              "the error of each input unit's own greedy action at the unit itself, and how many distinct action "
              "units the input units use:", ""]
-    for key in results:
+    for key, (own, distinct) in trained.own.items():
         task, preset, response = key
-        if task not in TARGETS:
-            continue
-        own, distinct = unit_errors(results[key])
-        n_units = results[key].learner.q.shape[1]
-        lines.append(f"- {task}, {preset}, {response}: greedy {fmt(greedy[key].mean(), 4)}; a unit's own action "
-                     f"misses by {fmt(own.mean(), 4)}; {distinct.mean():.1f} distinct greedy action units for "
-                     f"{n_units} input units.")
+        n_units = trained.results[key].learner.q.shape[1]
+        lines.append(f"- {task}, {preset}, {response}: greedy {fmt(trained.greedy[key].mean(), 4)}; a unit's own "
+                     f"action misses by {fmt(own.mean(), 4)}; {distinct.mean():.1f} distinct greedy action units "
+                     f"for {n_units} input units.")
     return lines
 
 
 def beyond(ctx: Context) -> Section:
-    """Train and compare both responses on the four tasks; figures, targets and notes."""
-    results, greedy = train(ctx)
+    """Train and compare both responses on the four tasks; figures, targets and notes.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
+    trained = train(ctx)
+    results, greedy = trained.results, trained.greedy
     section = Section("beyond", "Beyond the paper: a truly continuous SOM-Q response")
     section.choices += preset_choices("table1+", "table5+")
     section.choices += [
@@ -197,7 +243,6 @@ def beyond(ctx: Context) -> Section:
     ]
     section.notes += _table(results, greedy)
     section.claims += _target_claims(greedy) + _not_worse_claims(greedy)
-    section.notes += _diagnosis(results, greedy)
-    section.figures += beyond_figures.figures(ctx, results, greedy, response_profiles(results, greedy, ctx.quick),
-                                              TARGETS)
+    section.notes += _diagnosis(trained)
+    section.figures += beyond_figures.figures(ctx, results, greedy, trained.profiles, TARGETS)
     return section

@@ -7,7 +7,7 @@ import numpy as np
 from somarm import plots
 from somarm.learners.somq import RESPONSES
 from somarm.reproduce.common import Context
-from somarm.reproduce.figures import plt, save
+from somarm.reproduce.figures import log_error_axes, plt, save
 
 __all__ = ["STYLE", "figures"]
 
@@ -31,11 +31,10 @@ def _curves(ctx: Context, results: dict, targets: dict):
             error = -plots.moving_average(result.block_means, 10).mean(axis=1)
             ls = "-" if preset == presets[0] else "--"
             ax.plot(result.steps, error, ls=ls, color=STYLE[response], label=_label(preset, response))
-        ax.set(yscale="log", xlabel="step", ylabel="training error (mean over trials, 1000-step mean)", title=task)
         if task in targets:
             ax.axhline(targets[task][0], color="k", lw=0.8, ls=":", label=f"target (greedy) {targets[task][0]}")
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=8)
+        log_error_axes(ax, xlabel="step", ylabel="training error (mean over trials, 1000-step mean)", title=task,
+                       legend={"fontsize": 8})
     fig.suptitle("Beyond the paper: learning curves, winner and interpolated responses "
                  "(training error includes the exploration noise)")
     return save(ctx, fig, "beyond_learning_curves.png")

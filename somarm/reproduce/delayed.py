@@ -44,7 +44,17 @@ def _greedy_tips(task, learner, start: np.ndarray) -> np.ndarray:
 
 
 def train(ctx: Context) -> Trained:
-    """SOM-Q with gamma 0.9 and 0 in lockstep; greedy episodes of both and of the yardsticks."""
+    """SOM-Q with gamma 0.9 and 0 in lockstep; greedy episodes of both and of the yardsticks.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      Both runs, their greedy episodes and the yardsticks' (``Trained``).
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     base = RunConfig(task="reach2_obstacle", preset="obstacle", n_trials=ctx.pick(10, 1),
                      n_steps=ctx.pick(20_000, 1_000), seed=ctx.seed, block=200)
     configs = [base, RunConfig(**{**base.to_dict(), "overrides": {"gamma": "0"}})]
@@ -63,7 +73,14 @@ def train(ctx: Context) -> Trained:
 
 
 def measure(trained: Trained) -> dict:
-    """Success rates (mean and worst trial) and mean lengths of each run, and the yardsticks'."""
+    """Success rates (mean and worst trial) and mean lengths of each run, and the yardsticks'.
+
+    Args:
+      trained: ``train``'s answer.
+
+    Returns:
+      The numbers the claims read, by name (``rate``, ``worst``, ``length``: one per run).
+    """
     lengths = [g["mean_length"][np.isfinite(g["mean_length"])] for g in trained.greedy]
     random_runs = trained.random_runs
     return {
@@ -140,7 +157,18 @@ def _figure(ctx: Context, trained: Trained):
 
 
 def delayed_reward(ctx: Context) -> Section:
-    """SOM-Q with gamma 0.9 and 0 on reach2_obstacle; greedy success and length; yardsticks."""
+    """SOM-Q with gamma 0.9 and 0 on reach2_obstacle; greedy success and length; yardsticks.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     trained = train(ctx)
     config = trained.results[0].config
     notes = [

@@ -13,7 +13,7 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce.common import Context
 
-__all__ = ["plt", "save", "goal_circle", "schedule_overlay", "throw_action_map", "log_error_axes"]
+__all__ = ["plt", "save", "unit_square", "goal_circle", "schedule_overlay", "throw_action_map", "log_error_axes"]
 
 plt = plots.pyplot()
 
@@ -37,6 +37,12 @@ def save(ctx: Context, fig, name: str, *, crop: bool = True) -> Path:
         plt.close(fig)
         return ctx.path(name)
     return plots.save(fig, ctx.path(name), crop=crop)
+
+
+def unit_square(ax, **more) -> None:
+    """Show the unit square at equal scale (the reach tasks' plane, the throws' velocity square);
+    ``more``: further axes settings (labels, title)."""
+    ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", **more)
 
 
 def goal_circle(ax, centre: np.ndarray, radius: float, *, colour: str, label: str | None = None) -> None:

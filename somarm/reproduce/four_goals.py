@@ -6,7 +6,7 @@ import numpy as np
 
 from somarm import plots
 from somarm.reproduce.common import MOTORIC_CHOICE, Context, fmt, preset_choices, run_group, typical_trial
-from somarm.reproduce.figures import plt, save
+from somarm.reproduce.figures import plt, save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 
@@ -17,7 +17,18 @@ KINDS = ("somq", "motoric")
 
 
 def train(ctx: Context, switch: int) -> dict[str, RunResult]:
-    """Both learners on four_goals with Table 2, the goals moved at ``switch`` (a snapshot there)."""
+    """Both learners on four_goals with Table 2, the goals moved at ``switch`` (a snapshot there).
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+      switch: the step at which the goals move.
+
+    Returns:
+      Each learner's run, by kind (``KINDS``).
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials = ctx.pick(20, 4)
     configs = [
         RunConfig(task="four_goals", learner=kind, preset="table2", n_trials=n_trials, n_steps=2 * switch,
@@ -98,7 +109,7 @@ def _map_figures(ctx: Context, somq: RunResult, switch: int) -> list:
     ax.axvline(0.5, color="0.4", lw=0.8)
     goals = np.asarray(task_module.GOALS_BEFORE)
     ax.plot(goals[:, 0], goals[:, 1], "r+", ms=12, mew=2, label="goals (before the move)")
-    ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", title=f"Fig. 14: input map at t = {switch} (trial {i})")
+    unit_square(ax, title=f"Fig. 14: input map at t = {switch} (trial {i})")
     ax.legend(loc="upper right", fontsize=8)
     paths = [save(ctx, fig, "fig14_four_goals_input_map.png")]
     fig, ax = plt.subplots(figsize=(5.2, 5))
@@ -109,7 +120,18 @@ def _map_figures(ctx: Context, somq: RunResult, switch: int) -> list:
 
 
 def four_goals(ctx: Context) -> Section:
-    """Figs. 13-15: four goals by quadrant, moved mid-run; SOM-Q against the Motoric Map."""
+    """Figs. 13-15: four goals by quadrant, moved mid-run; SOM-Q against the Motoric Map.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     switch, early = ctx.pick(20_000, 1_500), ctx.pick(5000, 500)
     runs = train(ctx, switch)
     errors = {kind: phase_errors(r.steps, r.block_means, switch, early) for kind, r in runs.items()}

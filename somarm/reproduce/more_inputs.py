@@ -20,19 +20,39 @@ EXPERIMENTS = {
 }
 
 
-def train(ctx: Context) -> dict[str, RunResult]:
-    """A to D in lockstep: the four tasks' throws fly in one batch per step (results equal separate runs)."""
+def train(ctx: Context) -> tuple[dict[str, RunResult], dict[str, float]]:
+    """A to D in lockstep (the four tasks' throws fly in one batch per step; results equal separate
+    runs), and each task's error under random actions.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      The runs and the random actions' errors, both by experiment letter.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials, n_steps = ctx.pick(100, 4), ctx.pick(15_000, 1_200)
     configs = [
         RunConfig(task=task, preset=preset, n_trials=n_trials, n_steps=n_steps, seed=ctx.seed,
                   task_params={"punish_low": True})
         for task, preset in EXPERIMENTS.values()
     ]
-    return dict(zip(EXPERIMENTS, run_group(ctx, "Fig 25 A-D", configs), strict=True))
+    results = dict(zip(EXPERIMENTS, run_group(ctx, "Fig 25 A-D", configs), strict=True))
+    return results, random_errors(results, ctx.seed)
 
 
 def random_errors(results: dict[str, RunResult], seed: int) -> dict[str, float]:
-    """Each task's error under uniformly random actions, on 4000 observations of the evaluation stream."""
+    """Each task's error under uniformly random actions, on 4000 observations of the evaluation stream.
+
+    Args:
+      results: the trained runs (their tasks are used), by experiment letter.
+      seed: the evaluation stream's seed (observations and actions are drawn from it in turn).
+
+    Returns:
+      Minus the mean reward of the random actions, by experiment letter.
+    """
     errors = {}
     rng = evaluation.evaluation_rng(seed)
     for k, r in results.items():
@@ -89,10 +109,20 @@ def _figure(ctx: Context, results: dict[str, RunResult]):
 
 
 def more_inputs(ctx: Context) -> Section:
-    """Fig. 25: experiments A to D of Table 6 under Table 7, with the -2 punishment below 45 degrees."""
-    results = train(ctx)
+    """Fig. 25: experiments A to D of Table 6 under Table 7, with the -2 punishment below 45 degrees.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
+    results, random_error = train(ctx)
     mean = {k: float(final_error(r, 100).mean()) for k, r in results.items()}
-    random_error = random_errors(results, ctx.seed)
     config = results["A"].config
     section = Section("more_inputs", "Fig. 25: more varied inputs, experiments A-D (Tables 6 and 7)")
     section.choices += preset_choices("table7", "table7a")

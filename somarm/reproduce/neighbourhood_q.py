@@ -24,7 +24,17 @@ WINDOW = 1000
 
 
 def train(ctx: Context) -> dict[str, RunResult]:
-    """The three variants of Table 5 on throw_distance, in lockstep."""
+    """The three variants of Table 5 on throw_distance, in lockstep.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      Each variant's run, by its name in ``VARIANTS``.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials, n_steps = ctx.pick(20, 3), ctx.pick(25_000, 2_000)
     configs = [
         RunConfig(task="throw_distance", preset="table5", overrides=overrides, n_trials=n_trials,
@@ -115,7 +125,18 @@ def _figure(ctx: Context, results: dict[str, RunResult], level: float):
 
 
 def neighbourhood_q(ctx: Context) -> Section:
-    """Fig. 24: +NL/0.9985, -NL/0.9985 and -NL/0.9997 on throw_distance."""
+    """Fig. 24: +NL/0.9985, -NL/0.9985 and -NL/0.9997 on throw_distance.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     results = train(ctx)
     finals = {k: float(final_error(r, WINDOW).mean()) for k, r in results.items()}
     level = 1.1 * max(finals["+NL/0.9985"], finals["-NL/0.9997"])

@@ -49,7 +49,20 @@ def _final(result: dict, kind: str) -> float:
 
 def train(ctx: Context, budgets: dict[str, int], seeds: int, peer_samples: int) -> dict[str, dict]:
     """Every learner of ``TASKS`` on each task through ``somarm.peers.compare`` (which writes
-    ``peers/<task>/compare.json`` and ``compare.png``); its answer per task."""
+    ``peers/<task>/compare.json`` and ``compare.png``); its answer per task.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+      budgets: somarm's learners' samples, by task.
+      seeds: seeds per learner.
+      peer_samples: TD3's and SAC's samples.
+
+    Returns:
+      ``compare.compare``'s answer, by task.
+
+    Raises:
+      KeyboardInterrupt: a comparison was stopped (what finished is written).
+    """
     results = {}
     for task, learners in TASKS.items():
         config = compare.CompareConfig(task=task, learners=learners, samples=budgets[task],
@@ -61,7 +74,14 @@ def train(ctx: Context, budgets: dict[str, int], seeds: int, peer_samples: int) 
 def measure(results: dict[str, dict]) -> dict:
     """The fixed grid's final error over SOM-Q's on the low-dimensional tasks, reach20's table size
     for the smallest grid against the limit, SOM-Q's and random actions' error on reach20, and each
-    task's cost per sample of every learner."""
+    task's cost per sample of every learner.
+
+    Args:
+      results: ``train``'s answer.
+
+    Returns:
+      The numbers the claims and notes read, by name.
+    """
     grid = TabularConfig(action_bins=2)
     return {
         "ratios": {t: _final(results[t], "tabular") / _final(results[t], "somq") for t in _LOW_DIM},
@@ -106,7 +126,18 @@ def _notes(results: dict[str, dict], m: dict, seeds: int) -> list[str]:
 
 
 def peers(ctx: Context) -> Section:
-    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time."""
+    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (Ctrl-C during ``somarm.peers.compare``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     seeds, peer_samples = ctx.pick(2, 1), ctx.pick(1000, 120)
     budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
     results = train(ctx, budgets, seeds, peer_samples)

@@ -9,7 +9,7 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fit_circle, fmt, preset_choices, run, typical_trial
-from somarm.reproduce.figures import goal_circle, plt, save, schedule_overlay
+from somarm.reproduce.figures import goal_circle, plt, save, schedule_overlay, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
@@ -26,7 +26,17 @@ class Trained:
 
 
 def train(ctx: Context) -> Trained:
-    """Train Table 1 on reach2 and evaluate the greedy response on fresh goals."""
+    """Train Table 1 on reach2 and evaluate the greedy response on fresh goals.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      The run, its greedy distances and the fresh goals (``Trained``).
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials, n_steps = ctx.pick(20, 4), ctx.pick(50_000, 3_000)
     config = RunConfig(task="reach2", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
     result = run(ctx, "Figs 7-10 reach2", config)
@@ -35,30 +45,50 @@ def train(ctx: Context) -> Trained:
     return Trained(result, greedy, goals)
 
 
-def topology(learner, goals: np.ndarray) -> dict[str, np.ndarray]:
-    """Per trial ``(n_trials,)``: input-map topographic error on ``goals``, the action units whose
-    nearest unit is a map neighbour, and the mean greedy jump between neighbouring input units."""
+def topology(input_weights: np.ndarray, input_grid: np.ndarray, action_weights: np.ndarray,
+             action_grid: np.ndarray, q: np.ndarray, goals: np.ndarray) -> dict[str, np.ndarray]:
+    """How well each trial's maps and Q-table keep the grids' neighbourhoods.
+
+    Args:
+      input_weights: ``(n_trials, n_input_units, 2)``; input_grid: ``(n_input_units, 2)``.
+      action_weights: ``(n_trials, n_action_units, 2)``; action_grid: ``(n_action_units, 2)``.
+      q: ``(n_trials, n_input_units, n_action_units)``.
+      goals: ``(n, 2)`` fresh goals for the topographic error.
+
+    Returns:
+      ``te`` (input-map topographic error on ``goals``), ``nn`` (the share of action units whose
+      nearest unit is a map neighbour) and ``jumps`` (mean grid distance between the greedy action
+      units of neighbouring input units), each ``(n_trials,)``.
+    """
     te, nn, jumps = [], [], []
-    for i in range(learner.input_weights.shape[0]):
-        te.append(metrics.topographic_error(learner.input_weights[i], learner.input_grid, goals))
-        nn.append(metrics.nearest_is_neighbour(learner.action_weights[i], learner.action_grid))
-        jumps.append(
-            metrics.greedy_jumps(learner.q[i].argmax(axis=1), learner.input_grid, learner.action_grid).mean()
-        )
+    for i in range(len(input_weights)):
+        te.append(metrics.topographic_error(input_weights[i], input_grid, goals))
+        nn.append(metrics.nearest_is_neighbour(action_weights[i], action_grid))
+        jumps.append(metrics.greedy_jumps(q[i].argmax(axis=1), input_grid, action_grid).mean())
     return {"te": np.array(te), "nn": np.array(nn), "jumps": np.array(jumps)}
 
 
 def measure(trained: Trained) -> dict:
-    """Final errors, failing trials, topology and the typical trial (numbers only)."""
+    """Final errors (last 1000 steps), the trials failing at twice the median, topology, and the
+    trial with the median final error.
+
+    Args:
+      trained: ``train``'s answer.
+
+    Returns:
+      The numbers the claims read, by name (``errors`` and the topology measures per trial).
+    """
+    learner = trained.result.learner
     errors = final_error(trained.result, 1000)
-    n_trials, n_actions = len(errors), trained.result.learner.q.shape[2]
+    n_trials, n_actions = len(errors), learner.q.shape[2]
     median = float(np.median(errors))
     return {
         "errors": errors,
         "median": median,
         "failed": int((errors > 2 * median).sum()),
         "allowed": max(1, round(n_trials / 20)),
-        **topology(trained.result.learner, trained.goals),
+        **topology(learner.input_weights, learner.input_grid, learner.action_weights, learner.action_grid,
+                   learner.q, trained.goals),
         "random_jump": np.abs(np.subtract.outer(np.arange(n_actions), np.arange(n_actions))).mean(),
         "typical": typical_trial(errors),
     }
@@ -125,8 +155,7 @@ def _map_figures(ctx: Context, trained: Trained, i: int) -> list:
     goal_circle(ax, centre, radius, colour="0.5", label="goal circle")
     plots.draw_input_map(ax, learner.input_weights[i], learner.q[i].argmax(axis=1), learner.q.shape[2],
                          tuple(learner.config.input_shape), labels=("goal x", "goal y"))
-    ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal",
-           title=f"Fig. 9: input map (trial {i}), shaded by greedy action unit")
+    unit_square(ax, title=f"Fig. 9: input map (trial {i}), shaded by greedy action unit")
     ax.legend(loc="upper right")
     paths = [save(ctx, fig, "fig09_reach2_input_map.png")]
     fig, ax = plt.subplots(figsize=(5.2, 5))
@@ -137,7 +166,18 @@ def _map_figures(ctx: Context, trained: Trained, i: int) -> list:
 
 
 def reach2(ctx: Context) -> Section:
-    """Figs. 7-10: the 2-link arm reaching goals on a circle with Table 1."""
+    """Figs. 7-10: the 2-link arm reaching goals on a circle with Table 1.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     trained = train(ctx)
     m = measure(trained)
     config = trained.result.config

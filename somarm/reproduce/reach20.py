@@ -8,7 +8,7 @@ import numpy as np
 
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fit_circle, fmt, preset_choices, run, typical_trial
-from somarm.reproduce.figures import goal_circle, plt, save
+from somarm.reproduce.figures import goal_circle, plt, save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
@@ -30,7 +30,17 @@ class Trained:
 
 
 def train(ctx: Context) -> Trained:
-    """Train Table 1 on reach20; the greedy postures for 100 goals evenly around the goal circle."""
+    """Train Table 1 on reach20; the greedy postures for 100 goals evenly around the goal circle.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      The run, the goal circle, the sweep and its greedy postures (``Trained``).
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials, n_steps = ctx.pick(5, 1), ctx.pick(50_000, 3_000)
     config = RunConfig(task="reach20", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
     result = run(ctx, "Fig 11 reach20", config)
@@ -44,7 +54,15 @@ def train(ctx: Context) -> Trained:
 
 
 def posture_distance(postures: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """RMS wrapped joint-angle difference between postures ``a`` and ``b`` of ``(n_goals, n_links)``."""
+    """RMS wrapped joint-angle difference between postures ``a`` and ``b`` of ``(n_goals, n_links)``.
+
+    Args:
+      postures: ``(n_goals, n_links)`` joint angles.
+      a, b: ``(n,)`` indices of the postures compared.
+
+    Returns:
+      ``(n,)`` distances in radians.
+    """
     delta = postures[a] - postures[b]
     return np.sqrt((((delta + np.pi) % (2 * np.pi) - np.pi) ** 2).mean(axis=-1))
 
@@ -52,7 +70,16 @@ def posture_distance(postures: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.n
 def measure(goals: np.ndarray, postures: np.ndarray, seed: int) -> dict[str, np.ndarray]:
     """Per trial ``(n_trials,)``: posture change between neighbouring goals over that between random
     goal pairs (2000 pairs drawn from ``seed``), and the Spearman correlation of goal and posture
-    distance over those pairs."""
+    distance over those pairs.
+
+    Args:
+      goals: ``(n_goals, 2)`` the sweep, in order around the circle.
+      postures: ``(n_trials, n_goals, n_links)`` the greedy postures.
+      seed: seed of the random goal pairs.
+
+    Returns:
+      ``ratios`` and ``rhos``, each ``(n_trials,)``.
+    """
     n = len(goals)
     ratios, rhos = [], []
     pairs = np.random.default_rng(seed).integers(0, n, size=(2, 2000))
@@ -77,13 +104,23 @@ def _figure(ctx: Context, trained: Trained, i: int):
     for k, colour in enumerate(colours):
         ax.plot(joints[k, :, 0], joints[k, :, 1], "-o", ms=2, lw=1.2, color=colour)
         ax.plot(*trained.goals[show[k]], "x", color=colour, ms=8, mew=2)
-    ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", xlabel="x", ylabel="y",
-           title=f"Fig. 11: greedy postures of the 20-link arm (trial {i})")
+    unit_square(ax, xlabel="x", ylabel="y", title=f"Fig. 11: greedy postures of the 20-link arm (trial {i})")
     return save(ctx, fig, "fig11_reach20_postures.png")
 
 
 def reach20(ctx: Context) -> Section:
-    """Fig. 11: the 20-link arm, greedy postures for a sweep of goals."""
+    """Fig. 11: the 20-link arm, greedy postures for a sweep of goals.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     trained = train(ctx)
     m = measure(trained.goals, trained.postures, ctx.seed)
     ratio, rho = float(np.median(m["ratios"])), float(np.median(m["rhos"]))

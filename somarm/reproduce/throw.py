@@ -6,13 +6,13 @@ import numpy as np
 
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, typical_trial
-from somarm.reproduce.figures import plt, save, throw_action_map
+from somarm.reproduce.figures import plt, save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 from somarm.tasks import ballistics
 
 __all__ = ["TABLE3", "TARGET_X", "solution_curve", "landing", "train", "unit_spread", "ends", "steepness",
-           "throw"]
+           "trajectories", "throw"]
 
 #: Table 3's environment.
 TABLE3 = {"M": 1.0, "G": 0.05, "Fr": 0.1, "W": 0.0}
@@ -36,7 +36,17 @@ def landing(ux: np.ndarray, uy: np.ndarray, *, backend: str, **env) -> np.ndarra
 
 
 def train(ctx: Context) -> RunResult:
-    """Table 4 on the throw task, with snapshots of the action map along the run."""
+    """Table 4 on the throw task, with snapshots of the action map along the run.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      The run, with snapshots at throws 1, 20, 500, 4000 (those before its end) and at its end.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials, n_steps = ctx.pick(20, 4), ctx.pick(4000, 1500)
     config = RunConfig(task="throw", preset="table4", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
     spans_at = tuple(t for t in (1, 20, 500, 4000) if t < n_steps) + (n_steps,)
@@ -45,6 +55,10 @@ def train(ctx: Context) -> RunResult:
 
 def unit_spread(units: np.ndarray, curve: np.ndarray) -> dict[str, np.ndarray]:
     """Where the action units ``(n_trials, n_units, 2)`` lie against the solution ``curve``.
+
+    Args:
+      units: ``(n_trials, n_units, 2)`` in (u_x, u_y).
+      curve: ``solution_curve``'s answer.
 
     Returns:
       ``distances`` ``(n_trials, n_units)`` to the curve, ``coverage`` ``(n_trials,)`` the share of
@@ -63,6 +77,13 @@ def ends(units: np.ndarray, uy_low: float, uy_high: float) -> dict:
     The verdict is True when the low-end gap exceeds 0.02 and the high-end gap in >= 75% of trials,
     undecided (None) when only the first holds (both ends are left out: the bunched map cannot show
     a preference), False otherwise.
+
+    Args:
+      units: ``(n_trials, n_units, 2)`` in (u_x, u_y).
+      uy_low, uy_high: the curve's lowest and highest u_y.
+
+    Returns:
+      ``low_gaps`` and ``high_gaps`` ``(n_trials,)``, the shares ``low_avoided`` and ``low_more``, ``verdict``.
     """
     low_gaps = units[:, :, 1].min(axis=1) - uy_low
     high_gaps = uy_high - units[:, :, 1].max(axis=1)
@@ -75,7 +96,14 @@ def ends(units: np.ndarray, uy_low: float, uy_high: float) -> dict:
 
 def steepness(uy_low: float, uy_high: float) -> dict[str, np.ndarray]:
     """Eq. 7's landing point over the velocity square (201 x 201), its gradient's magnitude, and the
-    mean magnitude near the target curve's low and high ends (within 0.1 in u_y)."""
+    mean magnitude near the target curve's low and high ends (within 0.1 in u_y).
+
+    Args:
+      uy_low, uy_high: the target curve's lowest and highest u_y.
+
+    Returns:
+      ``ux``, ``uy``, ``landing``, ``slope`` (each ``(201, 201)``), ``low_end`` and ``high_end``.
+    """
     grid = np.linspace(0.0, 1.0, 201)
     ux, uy = np.meshgrid(grid, grid)
     landed = ballistics.landing_x(ux, uy, **TABLE3)
@@ -133,14 +161,29 @@ def _bunching_note(spans: dict[int, float]) -> str:
     )
 
 
-def _trajectories_figure(ctx: Context, curve: np.ndarray):
-    """Fig. 16: two throws of the solution curve that land at X = 4, simulated."""
+def trajectories(curve: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Two throws of the solution ``curve`` that land at X = 4, a sixth in from either end, simulated.
+
+    Args:
+      curve: ``solution_curve``'s answer.
+
+    Returns:
+      ``(u, path)`` per throw: the velocity ``(2,)`` and the flight's ``(n, 2)`` positions.
+    """
     from somarm.tasks import throw as throw_task
 
     valid = curve[np.isfinite(curve[:, 1])]
-    fig, ax = plt.subplots(figsize=(7, 3.8))
-    for point, colour in ((valid[len(valid) // 6], "C0"), (valid[-len(valid) // 6], "C3")):
+    throws = []
+    for point in (valid[len(valid) // 6], valid[-len(valid) // 6]):
         _, xy = throw_task.simulate_trajectory(point[0], point[1], throw_task.ThrowParams(**TABLE3))
+        throws.append((point, xy))
+    return throws
+
+
+def _trajectories_figure(ctx: Context, throws: list[tuple[np.ndarray, np.ndarray]]):
+    """Fig. 16: the two simulated throws of ``trajectories``."""
+    fig, ax = plt.subplots(figsize=(7, 3.8))
+    for (point, xy), colour in zip(throws, ("C0", "C3"), strict=True):
         ax.plot(xy[:, 0], xy[:, 1], color=colour, label=f"u = ({point[0]:.2f}, {point[1]:.2f})")
     ax.axhline(0, color="k", lw=0.8)
     ax.plot([TARGET_X], [0], "kv", ms=9, label="target X = 4")
@@ -156,7 +199,7 @@ def _action_map_figure(ctx: Context, curve: np.ndarray, units: np.ndarray, i: in
     throw_action_map(ax, curve, units, curve_style={"color": "k", "ls": "-", "lw": 1,
                                                     "label": "Eq. 8 solution curve"},
                      labels=("horizontal speed u_x", "vertical speed u_y"))
-    ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", title=f"Figs. 17-18: action map after {n_steps} throws (trial {i})")
+    unit_square(ax, title=f"Figs. 17-18: action map after {n_steps} throws (trial {i})")
     ax.legend(loc="upper right")
     return save(ctx, fig, "fig17_throw_action_map.png")
 
@@ -179,7 +222,18 @@ def _landing_figures(ctx: Context, curve: np.ndarray, slopes: dict) -> list:
 
 
 def throw(ctx: Context) -> Section:
-    """Figs. 16-20: a single state, target X = 4, Table 4, 4000 throws."""
+    """Figs. 16-20: a single state, target X = 4, Table 4, 4000 throws.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     result = train(ctx)
     curve = solution_curve()
     units = result.learner.action_weights[:, :, :]  # (n_trials, 30, 2) in (u_x, u_y)
@@ -200,7 +254,7 @@ def throw(ctx: Context) -> Section:
     section.claims += _claims(spread, gaps, slopes)
     section.notes.append(_bunching_note(spans))
     i = typical_trial(final_error(result, 400))
-    section.figures.append(_trajectories_figure(ctx, curve))
+    section.figures.append(_trajectories_figure(ctx, trajectories(curve)))
     section.figures.append(_action_map_figure(ctx, curve, units[i], i, config.n_steps))
     section.figures += _landing_figures(ctx, curve, slopes)
     return section

@@ -9,7 +9,7 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import plt, save, throw_action_map
+from somarm.reproduce.figures import plt, save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.reproduce.throw import landing, solution_curve
 from somarm.run import RunConfig, RunResult
@@ -30,7 +30,17 @@ class Trained:
 
 
 def train(ctx: Context) -> dict[int, Trained]:
-    """Table 5 on throw_distance at each N_A, three trials each; the greedy throws' landing points."""
+    """Table 5 on throw_distance at each N_A, three trials each; the greedy throws' landing points.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+
+    Returns:
+      Each neighbourhood's run and greedy landing points, by N_A (``Trained``).
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+    """
     n_trials, n_steps = 3, ctx.pick(10_000, 1_000)
     configs = [
         RunConfig(task="throw_distance", preset="table5", overrides={"n_a": str(n_a)}, n_trials=n_trials,
@@ -52,7 +62,14 @@ def train(ctx: Context) -> dict[int, Trained]:
 
 def measure(trained: Trained) -> dict[str, np.ndarray]:
     """Per trial ``(n_trials,)``: gap CV of the interior input units, mean miss of the greedy throws,
-    distinct greedy action units; and the final error of each trial over the last 1000 throws."""
+    distinct greedy action units; and the final error of each trial over the last 1000 throws.
+
+    Args:
+      trained: one neighbourhood's ``Trained``.
+
+    Returns:
+      ``cv``, ``miss``, ``distinct`` and ``final``, each ``(n_trials,)``.
+    """
     q = trained.result.learner.q
     cvs, misses = [], []
     for targets, landed in zip(trained.targets, trained.landed, strict=True):
@@ -95,7 +112,7 @@ def _trial_row(axes, learner, i: int, targets: np.ndarray, landed: np.ndarray, m
     axes[0].set_title(f"trial {i}: input map (shaded by greedy action unit)", fontsize=9)
     throw_action_map(axes[1], solution_curve(X=4.5), learner.action_weights[i],
                      curve_style={"color": "0.85", "lw": 4, "label": "lands at 4.5"}, labels=("u_x", "u_y"))
-    axes[1].set(xlim=(0, 1), ylim=(0, 1), aspect="equal")
+    unit_square(axes[1])
     axes[1].set_title("action map (shaded by index)", fontsize=9)
     index = np.arange(len(targets))
     axes[2].plot(index, targets, "k--", lw=0.8, label="target of the unit")
@@ -117,7 +134,18 @@ def _figure(ctx: Context, n_a: int, fig_no: int, trained: Trained, miss: np.ndar
 
 
 def throw_maps(ctx: Context) -> Section:
-    """Figs. 21-23: varied target distance, three trials each with N_A = 25, 50 and 5."""
+    """Figs. 21-23: varied target distance, three trials each with N_A = 25, 50 and 5.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
     trained = train(ctx)
     measured = {n_a: measure(t) for n_a, t in trained.items()}
     config = trained[SIZES[0][0]].result.config
