@@ -7,9 +7,11 @@ import numpy as np
 from somarm import plots
 from somarm.learners.somq import RESPONSES
 from somarm.reproduce.common import Context
-from somarm.reproduce.figures import log_error_axes, plt, save
+from somarm.reproduce.figures import log_error_axes, save
 
 __all__ = ["STYLE", "figures"]
+
+plt = plots.pyplot()
 
 #: One colour per response, the same in every figure.
 STYLE = {"winner": "C0", "interpolated": "C1"}

@@ -6,13 +6,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from somarm.plots import pyplot
 from somarm.reproduce.common import Context, fmt, preset_choices, run_group
-from somarm.reproduce.figures import plt, save
+from somarm.reproduce.figures import save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 from somarm.tasks import obstacle, obstacle_search
 
 __all__ = ["LABELS", "Trained", "train", "measure", "task_wall", "delayed_reward"]
+
+plt = pyplot()
 
 _EPISODES = 100  #: greedy episodes per trial, from the task's start distribution (20 when quick)
 #: The two learners, in the order trained: the paper's delayed reward, and none.

@@ -1,7 +1,6 @@
 """The report's figure helpers: writing a figure, and the drawings several experiments share.
 
-The only module of ``somarm.reproduce`` besides the experiments' own figure functions that draws;
-matplotlib comes in through ``somarm.plots.pyplot`` (headless).
+Matplotlib comes in through ``somarm.plots.pyplot`` (headless), here as in every module that draws.
 """
 
 from __future__ import annotations
@@ -13,7 +12,7 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce.common import Context
 
-__all__ = ["plt", "save", "unit_square", "goal_circle", "schedule_overlay", "throw_action_map", "log_error_axes"]
+__all__ = ["save", "unit_square", "goal_circle", "schedule_overlay", "throw_action_map", "log_error_axes"]
 
 plt = plots.pyplot()
 

@@ -6,11 +6,13 @@ import numpy as np
 
 from somarm import plots
 from somarm.reproduce.common import MOTORIC_CHOICE, Context, fmt, preset_choices, run_group, typical_trial
-from somarm.reproduce.figures import plt, save, unit_square
+from somarm.reproduce.figures import save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 
 __all__ = ["KINDS", "train", "phase_errors", "four_goals"]
+
+plt = plots.pyplot()
 
 #: The two learners compared, SOM-Q (graph A) and the Motoric Map (graph B).
 KINDS = ("somq", "motoric")

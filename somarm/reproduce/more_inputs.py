@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from somarm.plots import pyplot
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import log_error_axes, plt, save
+from somarm.reproduce.figures import log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
 __all__ = ["EXPERIMENTS", "train", "random_errors", "single_throw_sd", "more_inputs"]
+
+plt = pyplot()
 
 #: Table 6's experiments: the task (its varied inputs) and the preset of each.
 EXPERIMENTS = {

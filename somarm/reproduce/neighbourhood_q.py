@@ -7,11 +7,13 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import log_error_axes, plt, save
+from somarm.reproduce.figures import log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 
 __all__ = ["VARIANTS", "WINDOW", "train", "crossing", "speed_up", "neighbourhood_q"]
+
+plt = plots.pyplot()
 
 #: The three curves of Fig. 24 and the settings that make them.
 VARIANTS = {

@@ -9,11 +9,13 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fit_circle, fmt, preset_choices, run, typical_trial
-from somarm.reproduce.figures import goal_circle, plt, save, schedule_overlay, unit_square
+from somarm.reproduce.figures import goal_circle, save, schedule_overlay, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
 __all__ = ["Trained", "train", "measure", "topology", "reach2"]
+
+plt = plots.pyplot()
 
 
 @dataclass(frozen=True)

@@ -6,13 +6,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from somarm.plots import pyplot
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fit_circle, fmt, preset_choices, run, typical_trial
-from somarm.reproduce.figures import goal_circle, plt, save, unit_square
+from somarm.reproduce.figures import goal_circle, save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
 __all__ = ["Trained", "train", "posture_distance", "measure", "reach20"]
+
+plt = pyplot()
 
 _N_GOALS = 100  #: goals of the sweep around the circle
 

@@ -4,15 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from somarm.plots import pyplot
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, typical_trial
-from somarm.reproduce.figures import plt, save, throw_action_map, unit_square
+from somarm.reproduce.figures import save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 from somarm.tasks import ballistics
 
 __all__ = ["TABLE3", "TARGET_X", "solution_curve", "landing", "train", "unit_spread", "ends", "steepness",
            "trajectories", "throw"]
+
+plt = pyplot()
 
 #: Table 3's environment.
 TABLE3 = {"M": 1.0, "G": 0.05, "Fr": 0.1, "W": 0.0}

@@ -9,12 +9,14 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import plt, save, throw_action_map, unit_square
+from somarm.reproduce.figures import save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.reproduce.throw import landing, solution_curve
 from somarm.run import RunConfig, RunResult
 
 __all__ = ["SIZES", "Trained", "train", "measure", "throw_maps"]
+
+plt = plots.pyplot()
 
 #: Each action neighbourhood N_A and the figure that shows it.
 SIZES = ((25, 21), (50, 22), (5, 23))
