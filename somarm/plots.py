@@ -8,21 +8,49 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from somarm.io import atomic_write_bytes
 
-from somarm.io import atomic_write_bytes  # noqa: E402
-
-__all__ = ["save", "learning_curve", "draw_input_map", "draw_action_map", "run_figures"]
+__all__ = ["pyplot", "save", "learning_curve", "moving_average", "unit_colours", "draw_input_map", "draw_action_map",
+           "run_figures"]
 
 
-def save(fig: plt.Figure, path: str | Path) -> Path:
-    """Save a figure as PNG atomically and close it."""
+def pyplot():
+    """``matplotlib.pyplot`` on the headless Agg backend: how every figure module imports matplotlib.
+
+    Returns:
+      The ``matplotlib.pyplot`` module, its backend set to Agg before pyplot is first imported
+      (so no display is needed).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+
+    return matplotlib.pyplot
+
+
+plt = pyplot()
+
+
+def save(fig: plt.Figure, path: str | Path, *, crop: bool = True) -> Path:
+    """Save a figure as PNG (110 dpi) atomically and close it.
+
+    Args:
+      fig: the figure; closed once written.
+      path: where the PNG goes.
+      crop: trim the white margin to the drawn content (``bbox_inches="tight"``); False keeps the
+        figure's own size.
+
+    Returns:
+      ``path``.
+
+    Raises:
+      ValueError: the file cannot be written (a full disk), in one line naming it.
+    """
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
+    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight" if crop else None)
     plt.close(fig)
     return atomic_write_bytes(path, buffer.getvalue())
 
@@ -71,7 +99,8 @@ def moving_average(block_means: np.ndarray, window_blocks: int) -> np.ndarray:
     return (cumulative[ends] - cumulative[starts]) / (ends - starts)[:, None]
 
 
-def _unit_colours(n: int) -> np.ndarray:
+def unit_colours(n: int) -> np.ndarray:
+    """``n`` colours of the viridis map, from its first to its last, ``(n, 4)`` RGBA."""
     return plt.get_cmap("viridis")(np.linspace(0.0, 1.0, max(n, 1)))
 
 
@@ -102,7 +131,7 @@ def draw_input_map(
       weights: ``(n_input_units, obs_dim)``; a 1-D input space is drawn as unit index vs weight.
       greedy: ``(n_input_units,)`` index of each unit's greedy action unit.
     """
-    colours = _unit_colours(n_actions)[greedy]
+    colours = unit_colours(n_actions)[greedy]
     if weights.shape[1] == 1:
         points = np.column_stack([np.arange(len(weights)), weights[:, 0]])
         labels = ("input unit index", labels[0])
@@ -145,7 +174,7 @@ def draw_action_map(
         ax.scatter(
             values[:, 0],
             values[:, 1],
-            c=_unit_colours(len(values)),
+            c=unit_colours(len(values)),
             s=28,
             edgecolors="k",
             linewidths=0.4,

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.plots import plt, save
+from somarm.plots import pyplot, save
 
 __all__ = ["NAMES", "COLOURS", "compare_figure"]
 
@@ -16,6 +16,8 @@ NAMES = {"somq": "SOM-Q", "motoric": "Motoric Map", "tabular": "tabular (fixed g
          "td3": "SB3 TD3", "sac": "SB3 SAC"}
 #: One colour per learner, the same in every figure.
 COLOURS = {"somq": "C0", "motoric": "C1", "tabular": "C2", "td3": "C3", "sac": "C4"}
+
+plt = pyplot()
 
 
 def compare_figure(result: dict[str, Any], path: str | Path) -> Path:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from somarm import plots, tasks
+from somarm import tasks
 from somarm.reproduce.report import Section, merge_seeds
 from somarm.run import RunConfig, RunResult, final_rewards, train_group
 from somarm.run.split import train_split
@@ -23,6 +23,7 @@ __all__ = [
     "run_group",
     "run_experiment",
     "typical_trial",
+    "fit_circle",
     "final_error",
     "fmt",
 ]
@@ -58,14 +59,8 @@ class Context:
         return quick if self.quick else full
 
     def path(self, name: str) -> Path:
+        """Where the figure ``name`` goes: ``figures/name`` in the output folder."""
         return self.out_dir / "figures" / name
-
-    def save(self, fig, name: str) -> Path:
-        """Write a figure to ``figures/name`` (only closed, not drawn, when this seed draws none)."""
-        if not self.figures:
-            plots.plt.close(fig)
-            return self.path(name)
-        return plots.save(fig, self.path(name))
 
 
 def run(ctx: Context, label: str, config: RunConfig, *, snapshots_at: tuple[int, ...] = ()) -> RunResult:
@@ -131,6 +126,12 @@ MOTORIC_CHOICE = (
 def final_error(result: RunResult, window: int) -> np.ndarray:
     """Each trial's mean error (minus reward) over the last ``window`` steps, ``(n_trials,)``."""
     return -final_rewards(result.block_means, result.config.block, window)
+
+
+def fit_circle(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre ``(2,)`` and radius of the goal circle, read off the task's own goal samples ``(n, 2)``."""
+    centre = points.mean(axis=0)
+    return centre, float(np.linalg.norm(points - centre, axis=1).mean())
 
 
 def typical_trial(errors: np.ndarray) -> int:

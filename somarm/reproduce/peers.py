@@ -14,7 +14,7 @@ from somarm.peers.figure import NAMES
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
-__all__ = ["TASKS", "peers", "table"]
+__all__ = ["TASKS", "train", "measure", "peers", "table"]
 
 #: The tasks of the part and the learners run on each (a fixed grid cannot take reach20's 20 angles).
 TASKS: dict[str, tuple[str, ...]] = {
@@ -22,6 +22,8 @@ TASKS: dict[str, tuple[str, ...]] = {
     "reach20": ("somq", "motoric", "td3", "sac"),
     "throw_distance": compare.LEARNERS,
 }
+#: The tasks whose action space is small enough for a fixed grid.
+_LOW_DIM = ("reach2", "throw_distance")
 
 
 def table(result: dict) -> list[str]:
@@ -45,52 +47,105 @@ def _final(result: dict, kind: str) -> float:
     return float(np.median(result["learners"][kind]["error"][-1]))
 
 
-def peers(ctx: Context) -> Section:
-    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time."""
-    section = Section("peers", "Peers: SOM-Q beside a fixed action grid, TD3 and SAC (Stable-Baselines3)")
-    seeds = ctx.pick(2, 1)
-    peer_samples = ctx.pick(1000, 120)
-    budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
+def train(ctx: Context, budgets: dict[str, int], seeds: int, peer_samples: int) -> dict[str, dict]:
+    """Every learner of ``TASKS`` on each task through ``somarm.peers.compare`` (which writes
+    ``peers/<task>/compare.json`` and ``compare.png``); its answer per task.
+
+    Args:
+      ctx: where and how the experiment runs (its seed, quick mode and backend).
+      budgets: somarm's learners' samples, by task.
+      seeds: seeds per learner.
+      peer_samples: TD3's and SAC's samples.
+
+    Returns:
+      ``compare.compare``'s answer, by task.
+
+    Raises:
+      KeyboardInterrupt: a comparison was stopped (what finished is written).
+    """
     results = {}
     for task, learners in TASKS.items():
-        samples = budgets[task]
-        config = compare.CompareConfig(task=task, learners=learners, samples=samples, peer_samples=peer_samples,
-                                       seeds=seeds, eval_seed=ctx.seed)
-        out = ctx.out_dir / "peers" / task
-        results[task] = compare.compare(config, out, progress=ctx.progress)
-        section.figures.append(out / "compare.png")
-        section.notes += ["", f"`{task}`: median greedy error over {seeds} seed(s) on the same "
-                          f"{config.observations} fresh observations (random actions score "
-                          f"{fmt(results[task]['random_action_error'], 2)}); full data in "
-                          f"`peers/{task}/compare.json`.", "", *table(results[task])]
-    low_dim = ("reach2", "throw_distance")
-    ratios = {t: _final(results[t], "tabular") / _final(results[t], "somq") for t in low_dim}
-    section.claims.append(Claim(
-        "Discussion: where the action space is low-dimensional, it may be easier to hardwire fixed actions at "
-        "regular intervals and use standard Q-learning.",
-        "after the same samples, the fixed grid's median error is "
-        + ", ".join(f"{fmt(ratios[t], 2)} x SOM-Q's on {t}" for t in low_dim) + ".",
-        all(r <= 1.1 for r in ratios.values()),
-        "the grid's error at most 1.1 x SOM-Q's on both tasks",
-    ))
+        config = compare.CompareConfig(task=task, learners=learners, samples=budgets[task],
+                                       peer_samples=peer_samples, seeds=seeds, eval_seed=ctx.seed)
+        results[task] = compare.compare(config, ctx.out_dir / "peers" / task, progress=ctx.progress)
+    return results
+
+
+def measure(results: dict[str, dict]) -> dict:
+    """The fixed grid's final error over SOM-Q's on the low-dimensional tasks, reach20's table size
+    for the smallest grid against the limit, SOM-Q's and random actions' error on reach20, and each
+    task's cost per sample of every learner.
+
+    Args:
+      results: ``train``'s answer.
+
+    Returns:
+      The numbers the claims and notes read, by name.
+    """
     grid = TabularConfig(action_bins=2)
-    entries = grid.action_bins ** 20 * grid.observation_bins ** 2
-    somq20 = _final(results["reach20"], "somq")
-    random20 = results["reach20"]["random_action_error"]
-    section.claims.append(Claim(
-        "Fig. 11: with 20 joint angles it is infeasible to populate the action space with enough a priori fixed "
-        "actions; SOM-Q's adaptive action map learns the task.",
-        f"even 2 values per angle over the {grid.observation_bins ** 2} observation cells make {entries:,} table "
-        f"entries (the limit is "
-        f"{MAX_TABLE_ENTRIES:,}); SOM-Q's 50 action units reach a median error {fmt(somq20, 2)} (random actions "
-        f"{fmt(random20, 2)}).",
-        entries > MAX_TABLE_ENTRIES and somq20 < random20 / 2,
-        "no fixed grid fits, and SOM-Q's error below half the random actions'",
-    ))
-    for task in TASKS:
-        fast = {k: np.median(v["seconds_per_sample"]) for k, v in results[task]["learners"].items()}
-        section.notes += ["", f"Cost per sample on `{task}`: TD3 {fast['td3'] / fast['somq']:.3g} x and SAC "
-                          f"{fast['sac'] / fast['somq']:.3g} x SOM-Q's (same run, same machine)."]
+    return {
+        "ratios": {t: _final(results[t], "tabular") / _final(results[t], "somq") for t in _LOW_DIM},
+        "cells": grid.observation_bins ** 2,
+        "entries": grid.action_bins ** 20 * grid.observation_bins ** 2,
+        "somq20": _final(results["reach20"], "somq"),
+        "random20": results["reach20"]["random_action_error"],
+        "cost": {task: {k: np.median(v["seconds_per_sample"]) for k, v in results[task]["learners"].items()}
+                 for task in TASKS},
+    }
+
+
+def _claims(m: dict) -> list[Claim]:
+    ratios, entries = m["ratios"], m["entries"]
+    return [
+        Claim("Discussion: where the action space is low-dimensional, it may be easier to hardwire fixed actions "
+              "at regular intervals and use standard Q-learning.",
+              "after the same samples, the fixed grid's median error is "
+              + ", ".join(f"{fmt(ratios[t], 2)} x SOM-Q's on {t}" for t in _LOW_DIM) + ".",
+              all(r <= 1.1 for r in ratios.values()), "the grid's error at most 1.1 x SOM-Q's on both tasks"),
+        Claim("Fig. 11: with 20 joint angles it is infeasible to populate the action space with enough a priori "
+              "fixed actions; SOM-Q's adaptive action map learns the task.",
+              f"even 2 values per angle over the {m['cells']} observation cells make {entries:,} table entries "
+              f"(the limit is {MAX_TABLE_ENTRIES:,}); SOM-Q's 50 action units reach a median error "
+              f"{fmt(m['somq20'], 2)} (random actions {fmt(m['random20'], 2)}).",
+              entries > MAX_TABLE_ENTRIES and m["somq20"] < m["random20"] / 2,
+              "no fixed grid fits, and SOM-Q's error below half the random actions'"),
+    ]
+
+
+def _notes(results: dict[str, dict], m: dict, seeds: int) -> list[str]:
+    notes = []
+    for task, result in results.items():
+        notes += ["", f"`{task}`: median greedy error over {seeds} seed(s) on the same "
+                  f"{result['observations']} fresh observations (random actions score "
+                  f"{fmt(result['random_action_error'], 2)}); full data in `peers/{task}/compare.json`.", "",
+                  *table(result)]
+    for task, cost in m["cost"].items():
+        notes += ["", f"Cost per sample on `{task}`: TD3 {cost['td3'] / cost['somq']:.3g} x and SAC "
+                  f"{cost['sac'] / cost['somq']:.3g} x SOM-Q's (same run, same machine)."]
+    return notes
+
+
+def peers(ctx: Context) -> Section:
+    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time.
+
+    Args:
+      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
+
+    Returns:
+      The report's section: claims with their verdicts, notes, this project's choices, the figures.
+
+    Raises:
+      KeyboardInterrupt: the training was stopped (Ctrl-C during ``somarm.peers.compare``).
+      ValueError: a figure cannot be written (a full disk), in one line naming it.
+    """
+    seeds, peer_samples = ctx.pick(2, 1), ctx.pick(1000, 120)
+    budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
+    results = train(ctx, budgets, seeds, peer_samples)
+    m = measure(results)
+    section = Section("peers", "Peers: SOM-Q beside a fixed action grid, TD3 and SAC (Stable-Baselines3)")
+    section.figures += [ctx.out_dir / "peers" / task / "compare.png" for task in TASKS]
+    section.notes += _notes(results, m, seeds)
+    section.claims += _claims(m)
     section.choices += [
         f"Budgets: somarm's learners train for "
         f"{', '.join(f'{fmt(n)} samples on {t}' for t, n in budgets.items())}"

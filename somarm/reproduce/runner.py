@@ -12,7 +12,18 @@ from pathlib import Path
 from somarm import __version__
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.peers.compare import peers_missing
-from somarm.reproduce import arms, beyond, delayed, peers, throws
+from somarm.reproduce import (
+    beyond,
+    delayed,
+    four_goals,
+    more_inputs,
+    neighbourhood_q,
+    peers,
+    reach2,
+    reach20,
+    throw,
+    throw_maps,
+)
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section, claim_record, render
 from somarm.tasks.base import BACKENDS
@@ -22,15 +33,15 @@ __all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
-    "reach2": arms.reach2,
-    "reach20": arms.reach20,
-    "four_goals": arms.four_goals,
-    "throw": throws.throw,
-    "throw_maps": throws.throw_maps,
-    "neighbourhood_q": throws.neighbourhood_q,
-    "more_inputs": throws.more_inputs,
+    "reach2": reach2.reach2,
+    "reach20": reach20.reach20,
+    "four_goals": four_goals.four_goals,
+    "throw": throw.throw,
+    "throw_maps": throw_maps.throw_maps,
+    "neighbourhood_q": neighbourhood_q.neighbourhood_q,
+    "more_inputs": more_inputs.more_inputs,
     "delayed_reward": delayed.delayed_reward,
-    # Not the paper's: its suggested continuous response (issue 11), apart from the paper's claims.
+    # Not the paper's: the continuous response its section 6 suggests, apart from the paper's claims.
     "beyond": beyond.beyond,
 }
 

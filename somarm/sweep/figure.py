@@ -14,6 +14,8 @@ from somarm.sweep.spec import preset_value, same_value
 
 __all__ = ["draw"]
 
+plt = plots.pyplot()
+
 
 def _numbers(values: list[str]) -> np.ndarray | None:
     try:
@@ -29,8 +31,6 @@ def draw(table, path: Path) -> Path:
       table: a ``somarm.sweep.store.Table`` with at least one row.
       path: where the PNG goes (written atomically).
     """
-    import matplotlib.pyplot as plt
-
     keys = table.keys
     fig, axes = plt.subplots(1, len(keys), figsize=(4.2 * len(keys), 3.4), squeeze=False, sharey=True)
     stats = table.per_point()
