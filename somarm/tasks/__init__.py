@@ -166,7 +166,7 @@ def load(name: str, *, seed: int = 0, **params: Any):
 
     physics, task = record(name).environment(make(name, seed=seed, **params))
     # A driven arm integrates several timesteps per action (actuated reach, reach2_obstacle).
-    return control.Environment(physics, task, n_sub_steps=getattr(task, "sub_steps", 1))
+    return control.Environment(physics, task, n_sub_steps=task.sub_steps)
 
 
 def threads() -> int:

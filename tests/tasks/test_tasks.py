@@ -259,6 +259,11 @@ def test_every_task_record_agrees_with_its_task(name):
     assert len(record.observation_labels) == task.observation_dim
     assert len(record.action_labels) == 2 and record.view in ("goals", "sweep", "fan")
     assert set(record.settable) <= set(record.fields())
+    # The task declares what the record says, and every member of its protocol.
+    from somarm.protocols import BatchedTask, EpisodicTask
+
+    assert task.episodic == record.episodic and isinstance(task, BatchedTask)
+    assert isinstance(task, EpisodicTask) == task.episodic
 
 
 @pytest.mark.parametrize("name", tasks.names())
