@@ -11,7 +11,8 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from somarm.learners.base import LearnerBase, initial_generator, read_file
+from somarm.learners.base import LearnerBase, initial_generator
+from somarm.learners.file import read_file
 from somarm.learners.motoric import MotoricConfig, MotoricMap
 from somarm.learners.somq import SOMQ, SOMQConfig
 from somarm.learners.tabular import TabularConfig, TabularQ

@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from somarm.learners import file as learner_file
-from somarm.learners.file import read_file, restore
+from somarm.learners.file import restore
 from somarm.learners.schedules import Schedule
 from somarm.learners.settings import apply_settings, parse_settings
 from somarm.learners.som import map_shape
@@ -32,7 +32,6 @@ __all__ = [
     "LearnerBase",
     "ConfigBase",
     "initial_generator",
-    "read_file",
     "validate_common",
     "config_to_dict",
     "config_from_dict",
