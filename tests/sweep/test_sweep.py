@@ -84,6 +84,15 @@ def test_points_sharing_a_task_and_seed_train_in_one_group_cut_only_for_memory()
     assert len(plan_chunks(items, max_bytes=1.0)) == 8  # too big for one group: one point each
 
 
+@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
+def test_chunks_are_cut_by_each_learner_kinds_own_memory_estimate(kind):
+    from somarm.run import RunConfig
+
+    config = RunConfig(task="reach2", learner=kind).resolved()
+    items = [(0, 0, config), (1, 0, config)]
+    assert len(plan_chunks(items)) == 1 and len(plan_chunks(items, max_bytes=1.0)) == 2
+
+
 def test_a_local_sweep_equals_separate_runs_bit_for_bit(tmp_path, capsys):
     out = tmp_path / "sweep"
     argv = ["sweep", "reach2", "--grid", "alpha=0.5,1", "--grid", "task.radius=0.2,0.25", "--seeds", "2"]
