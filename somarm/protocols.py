@@ -18,7 +18,7 @@ __all__ = ["Learner", "BatchedTask", "EpisodicTask"]
 
 @runtime_checkable
 class Learner(Protocol):
-    """What every learner (SOM-Q, Motoric Map) offers, batched over independent trials."""
+    """What every learner (SOM-Q, Motoric Map, tabular) offers, batched over independent trials."""
 
     kind: str  #: the registry's name of the learner's kind (``somarm.learners.LEARNERS``)
     n_trials: int

@@ -15,7 +15,7 @@ def test_registry():
                                  "tabular": (TabularConfig, TabularQ)}
 
 
-@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
+@pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_make_and_load_any_kind(tmp_path, kind):
     learner = learners.make(kind, None, n_trials=2, seed=3, **BOX)
     assert learner.kind == kind

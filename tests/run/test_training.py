@@ -3,7 +3,7 @@ import json
 import numpy as np
 import pytest
 
-from somarm import run
+from somarm import learners, run
 from somarm.run import RunConfig
 
 
@@ -149,7 +149,7 @@ def test_run_folder_round_trip_and_figures(tmp_path):
     np.testing.assert_array_equal(learner.q, result.learner.q)
 
 
-@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
+@pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_every_learner_kind_passes_the_memory_check_trains_and_reloads(tmp_path, kind):
     config = RunConfig(task="reach2", learner=kind, n_trials=2, n_steps=200, block=50, seed=1).resolved()
     run.check_memory_needs([config])  # each kind's own estimate, through the registry

@@ -7,7 +7,7 @@ import signal
 import numpy as np
 import pytest
 
-from somarm import cli, run
+from somarm import cli, learners, run
 from somarm.run import group
 from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
 from somarm.sweep.spec import preset_value
@@ -84,7 +84,7 @@ def test_points_sharing_a_task_and_seed_train_in_one_group_cut_only_for_memory()
     assert len(plan_chunks(items, max_bytes=1.0)) == 8  # too big for one group: one point each
 
 
-@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
+@pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_chunks_are_cut_by_each_learner_kinds_own_memory_estimate(kind):
     from somarm.run import RunConfig
 
