@@ -33,7 +33,7 @@ def _cmd_tasks(args) -> int:
     from somarm import tasks
 
     for name in tasks.names():
-        print(f"{name:16s} {tasks.describe(name)}")
+        print(f"{name:16s} {tasks.record(name).summary}")
     return 0
 
 

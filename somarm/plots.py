@@ -222,11 +222,11 @@ def run_figures(result, out: Path) -> list[Path]:
     ax.legend(loc="lower right")
     paths.append(save(fig, out / "learning_curve.png"))
 
-    if not hasattr(learner, "input_weights"):  # no maps to draw (the tabular learner's grids are fixed)
+    if not learner.has_maps:  # no maps to draw (the tabular learner's grids are fixed)
         return paths
     input_weights = np.asarray(learner.input_weights)[0]
     grid_shape = tuple(learner.config.input_shape)
-    if hasattr(learner, "q"):
+    if learner.has_action_map:
         greedy = np.asarray(learner.q)[0].argmax(axis=1)
         n_actions = np.asarray(learner.q).shape[2]
     else:  # Motoric Map: each input unit owns its action; shade by unit index
@@ -248,12 +248,12 @@ def run_figures(result, out: Path) -> list[Path]:
         task.action_low,
         task.action_high,
         labels=action_labels,
-        join=hasattr(learner, "q"),  # a Motoric Map's actions follow the input grid, not a chain
-        periodic=getattr(learner, "periodic_dimensions", None),
+        join=learner.has_action_map,  # a Motoric Map's actions follow the input grid, not a chain
+        periodic=learner.periodic_dimensions,
     )
     ax.set_title(
         f"action map (trial {first}), shaded by unit index"
-        if hasattr(learner, "q")
+        if learner.has_action_map
         else f"each input unit's action (trial {first}), shaded by input unit"
     )
     paths.append(save(fig, out / "action_map.png"))

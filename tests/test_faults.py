@@ -85,7 +85,7 @@ def test_damaged_learner_meta_is_one_line_naming_the_file(damage, run_folder, tm
     path = tmp_path / "learner.npz"
     _rewrite_meta(run_folder / "learner.npz", path, change)
     with pytest.raises(ValueError, match="damaged learner file") as caught:
-        learners.load_learner(path)
+        learners.load(path)
     assert str(path) in str(caught.value) and needle in str(caught.value)
     assert len(str(caught.value).splitlines()) == 1
 
@@ -96,7 +96,7 @@ def test_damaged_learner_array_names_the_file(run_folder, tmp_path):
     path = tmp_path / "learner.npz"
     np.savez_compressed(path, **arrays)
     with pytest.raises(ValueError, match=f"{path} is a damaged learner file: array 'q' is missing"):
-        learners.load_learner(path)
+        learners.load(path)
 
 
 def _copy_run(run_folder: Path, dst: Path) -> Path:

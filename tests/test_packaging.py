@@ -54,3 +54,17 @@ def test_the_library_on_a_headless_machine_prints_no_glfw_warning():
     done = subprocess.run([sys.executable, "-c", "import os, somarm; print(os.environ['MUJOCO_GL'])"], env=env,
                           capture_output=True, text=True, timeout=60)
     assert done.stdout.strip() == "egl"
+
+
+def test_the_version_is_written_once_and_packaging_reads_it_from_the_package():
+    import pytest
+
+    import somarm
+
+    project = _pyproject()["project"]
+    assert "version" not in project and project["dynamic"] == ["version"]
+    assert _pyproject()["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "somarm.__version__"}
+    pyprojecttoml = pytest.importorskip("setuptools.config.pyprojecttoml")
+    expanded = pyprojecttoml.read_configuration(ROOT / "pyproject.toml", expand=True)
+    assert expanded["project"]["version"] == somarm.__version__
+    assert re.fullmatch(r"\d+\.\d+\.\d+", somarm.__version__)

@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     driven = args.only is None or "driven" in names or "reach2_obstacle" in names
     names = [name for name in names if name not in ("driven", "reach2_obstacle")]
     for name in names:
-        tasks.describe(name)  # unknown names fail here, in one line
+        tasks.record(name)  # unknown names fail here, in one line
     scale = 20 if args.quick else 1
     repeats = 1 if args.quick else max(1, args.repeats)
     episodes, steps = (30, 5) if args.quick else (300, 40)

@@ -1,8 +1,9 @@
 """The learner registry: every learner kind, by name, and the one place that lists them.
 
-``make`` builds a learner of a kind and ``load`` reopens a saved one whatever its kind. A new
-kind is its own module (a config subclassing ``learner_base.ConfigBase`` and a learner
-subclassing ``learner_base.LearnerBase``) plus one line in ``LEARNERS``.
+``make`` builds a learner of a kind, ``load`` reopens a saved one whatever its kind, and
+``memory_needed`` says what one would allocate. A new kind is its own module (a config
+subclassing ``base.ConfigBase`` and a learner subclassing ``base.LearnerBase``, with its
+``memory_needed``) plus one line in ``LEARNERS``.
 """
 
 from __future__ import annotations
@@ -10,21 +11,20 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from somarm.learners.base import initial_generator, read_file
+from somarm.learners.base import LearnerBase, initial_generator
+from somarm.learners.file import read_file
 from somarm.learners.motoric import MotoricConfig, MotoricMap
 from somarm.learners.somq import SOMQ, SOMQConfig
 from somarm.learners.tabular import TabularConfig, TabularQ
 
-__all__ = ["LEARNERS", "KINDS", "config_class", "make", "load", "make_learner", "load_learner",
-           "initial_generator"]
+__all__ = ["LEARNERS", "config_class", "make", "load", "memory_needed", "initial_generator"]
 
-#: kind -> (config class, learner class)
-LEARNERS: dict[str, tuple[type, type]] = {
+#: kind -> (config class, learner class); the kinds are its keys.
+LEARNERS: dict[str, tuple[type, type[LearnerBase]]] = {
     "somq": (SOMQConfig, SOMQ),
     "motoric": (MotoricConfig, MotoricMap),
     "tabular": (TabularConfig, TabularQ),
 }
-KINDS = tuple(LEARNERS)
 
 
 def _entry(kind: str) -> tuple[type, type]:
@@ -46,7 +46,7 @@ def make(kind: str, config: Any = None, **kwargs: Any):
     """Build a learner by kind.
 
     Args:
-      kind: one of ``KINDS``.
+      kind: a key of ``LEARNERS``.
       config: its config (default: the config class's defaults).
       **kwargs: the learner's keywords (observation_low, ..., n_trials, seed, trial_ids).
 
@@ -72,5 +72,15 @@ def load(path: str | os.PathLike):
     return LEARNERS[kind][1].load(path)
 
 
-make_learner = make  # the names before issue 8
-load_learner = load
+def memory_needed(kind: str, config: Any, *, n_trials: int, obs_dim: int, action_dim: int) -> tuple[str, float]:
+    """What a learner of ``kind`` would allocate, ``(description, bytes)``: its class's own estimate,
+    the one it checks when built (``LearnerBase.memory_needed``).
+
+    Args:
+      kind: a key of ``LEARNERS``. config: its config. n_trials: trials.
+      obs_dim, action_dim: the task's dimensions (1 and 1 give a lower bound).
+
+    Raises:
+      ValueError: an unknown kind (the kinds are listed), or settings a kind refuses outright.
+    """
+    return _entry(kind)[1].memory_needed(config, n_trials=n_trials, obs_dim=obs_dim, action_dim=action_dim)

@@ -1,8 +1,10 @@
 """What every learner shares: checks, config helpers, the file format, the abstract verbs.
 
-``LearnerBase`` is the base of SOM-Q and the Motoric Map (abstract ``act``, ``learn``,
-``greedy_units``, ``predict``); ``ConfigBase`` gives a learner config ``to_dict``, ``from_dict``,
-``with_changes`` (typed settings by key, ``somarm.learners.settings``) and ``from_table``. The registry of kinds sits above, in ``somarm.learners``.
+``LearnerBase`` is the base of every learner kind (checks, memory check, save and load; abstract
+``act``, ``learn``, ``predict``); ``somarm.learners.maps.MapLearner`` adds the input map SOM-Q and
+the Motoric Map share (and ``greedy_units``); ``ConfigBase`` gives a learner config ``to_dict``,
+``from_dict``, ``with_changes`` (typed settings by key, ``somarm.learners.settings``) and
+``from_table``. The registry of kinds sits above, in ``somarm.learners``.
 
 A saved learner is one ``.npz`` (written atomically): its arrays, plus a JSON string holding
 the kind, config, bounds, seed, trial ids, step count and random-stream positions. Loading it
@@ -14,15 +16,15 @@ from __future__ import annotations
 import abc
 import dataclasses
 import os
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from somarm.learners import file as learner_file
-from somarm.learners.file import read_file, restore
+from somarm.learners.file import restore
 from somarm.learners.schedules import Schedule
 from somarm.learners.settings import apply_settings, parse_settings
-from somarm.learners.som import grid_coordinates, grid_distances, map_shape
+from somarm.learners.som import map_shape
 from somarm.streams import PURPOSES, UniformStreams, trial_ids_for
 from somarm.validation import check_bounds, check_int, check_memory, check_number, check_periodic, real_array
 
@@ -30,27 +32,10 @@ __all__ = [
     "LearnerBase",
     "ConfigBase",
     "initial_generator",
-    "memory_needed",
-    "read_file",
     "validate_common",
     "config_to_dict",
     "config_from_dict",
 ]
-
-
-def memory_needed(kind: str, config: Any, n_trials: int, obs_dim: int, action_dim: int) -> tuple[str, float]:
-    """What a learner will allocate: ``(description, bytes)``, e.g. for ``check_memory``.
-
-    Counts the grid-distance matrices (built through a ``(units, units, grid dims)`` difference)
-    and, per trial, the weights and Q (SOM-Q) or unit values (Motoric Map).
-    """
-    maps = [name for name in ("input_shape", "action_shape") if hasattr(config, name)]  # Motoric: input only
-    units = [int(np.prod(getattr(config, name))) for name in maps]
-    n_s, n_a = units[0], units[-1]
-    n_floats = sum(n * n * (len(getattr(config, name)) + 1) for n, name in zip(units, maps, strict=True))
-    n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + (n_s * n_a if len(maps) == 2 else n_s))
-    shapes = ", ".join(f"{name}={'x'.join(map(str, getattr(config, name)))}" for name in maps)
-    return f"a {kind} learner with {shapes} and {n_trials} trial(s)", 8.0 * n_floats
 
 
 def initial_generator(seed: int, trial_id: int) -> np.random.Generator:
@@ -174,19 +159,30 @@ class ConfigBase:
 
 
 class LearnerBase(abc.ABC):
-    """What SOM-Q and the Motoric Map share: the input map, checks, parameters, save and load.
+    """What every learner kind shares: checks of its settings, the memory check, save and load.
 
-    A subclass sets ``kind``, ``config_class``, ``_STATE_ARRAYS`` (arrays saved and restored) and
-    implements ``_build`` (its own maps and random streams), ``act``, ``learn``, ``greedy_units``
-    and ``predict`` (the verbs of ``somarm.protocols.Learner``).
+    A subclass sets ``kind``, ``config_class``, ``_STATE_ARRAYS`` and ``_PENDING_ARRAYS`` (arrays
+    saved and restored), says what it has (``has_maps``, ``has_action_map``, ``learned_arrays``),
+    and implements ``memory_needed``, ``_build`` (its own tables or maps and random streams),
+    ``act``, ``learn`` and ``predict`` (the verbs of ``somarm.protocols.Learner``).
     """
 
     kind = ""
     config_class: type = object
+    #: An input SOM (``input_weights``, ``config.input_shape``) and an action per unit (``action_weights``).
+    has_maps: ClassVar[bool] = False
+    #: The action units form a map of their own, joined to the input units by a Q-table ``q``
+    #: (SOM-Q); False where each input unit keeps a private action (Motoric Map) or there is no map.
+    has_action_map: ClassVar[bool] = False
+    #: The arrays that show what has been learned, copied for figures mid-run (``run.loop.snapshot``).
+    learned_arrays: ClassVar[tuple[str, ...]] = ()
     _STATE_ARRAYS: tuple[str, ...] = ()
-    _PENDING_ARRAYS = ("_observations", "_winners", "_units", "_actions")
+    #: What ``act`` leaves for ``learn``: saved too, so a learner saved between them continues.
+    _PENDING_ARRAYS: tuple[str, ...] = ()
     #: Arrays a file may lack because it predates them: they keep the value a fresh learner builds.
     _OPTIONAL_ARRAYS: tuple[str, ...] = ()
+    #: What to change when the memory check refuses a learner.
+    _MEMORY_HINT = "use smaller maps or fewer trials"
 
     def __init__(self, config, *, observation_low, observation_high, action_low, action_high,
                  n_trials: int = 1, seed: int = 0, trial_ids=None, action_periodic=None):
@@ -202,20 +198,31 @@ class LearnerBase(abc.ABC):
         self.obs_dim, self.action_dim = self.observation_low.size, self.action_low.size
         # The task's angles: dimensions whose low and high are one point (used where a config says so).
         self.action_periodic = check_periodic(action_periodic, self.action_dim)
-        self._check_sizes()
+        check_memory(*self.memory_needed(config, n_trials=self.n_trials, obs_dim=self.obs_dim,
+                                         action_dim=self.action_dim), self._MEMORY_HINT)
         self.t = 0
-        self.input_grid, self._distances_s = self._grid(config.input_shape)
-        self.input_weights = np.empty((self.n_trials, self.input_grid.shape[0], self.obs_dim))
-        # What act() leaves for learn(): observations, winners, chosen units, perturbed actions.
-        self._observations = np.zeros((self.n_trials, self.obs_dim))
-        self._winners = np.zeros(self.n_trials, dtype=np.int64)
-        self._units = np.zeros(self.n_trials, dtype=np.int64)
-        self._actions = np.zeros((self.n_trials, self.action_dim))
         self._pending = False
-        self._no_bootstrap = np.zeros(self.n_trials, dtype=np.bool_)
         self._current_t = -1
-        self._epsilon_buffer = np.empty(self.action_dim)
         self._build()
+
+    @classmethod
+    @abc.abstractmethod
+    def memory_needed(cls, config, *, n_trials: int, obs_dim: int, action_dim: int) -> tuple[str, float]:
+        """What a learner of this kind will allocate, ``(description, bytes)``, before it is built.
+
+        The one estimate of a kind's memory: the learner checks it when built, and
+        ``somarm.learners.memory_needed`` gives it to whoever plans a run.
+
+        Args:
+          config: the kind's config. n_trials: trials. obs_dim, action_dim: the task's dimensions.
+
+        Returns:
+          A description of the learner as the user set it (``a somq learner with input_shape=50, ...``)
+          and the bytes its arrays take.
+
+        Raises:
+          ValueError: settings whose arrays no machine could hold (one line), where a kind has a limit.
+        """
 
     @abc.abstractmethod
     def _build(self) -> None:
@@ -230,62 +237,24 @@ class LearnerBase(abc.ABC):
         """Learn from the rewards ``(n_trials,)`` of the actions of the last ``act``."""
 
     @abc.abstractmethod
-    def greedy_units(self, observations) -> tuple[np.ndarray, np.ndarray]:
-        """Winning input unit and greedy action unit of each observation."""
-
-    @abc.abstractmethod
     def predict(self, observations) -> np.ndarray:
         """Greedy actions, no exploration, no learning: ``(n_trials, [n_obs,] action_dim)``."""
 
-    def _check_sizes(self) -> None:
-        """Refuse, before allocating, maps that do not fit in memory and an epsilon that overflows."""
-        check_memory(*memory_needed(self.kind, self.config, self.n_trials, self.obs_dim, self.action_dim),
-                     "use smaller maps or fewer trials")
-        largest = max(self.config.epsilon.scale, self.config.epsilon.floor)
-        span = np.max(self.action_high - self.action_low) if self.config.epsilon_relative else 1.0
-        with np.errstate(over="ignore"):  # a perturbed action: up to a few epsilons from a bound
-            if not np.isfinite(largest * span * 4.0 + np.max(np.abs([self.action_low, self.action_high]))):
-                raise ValueError(f"epsilon={largest:g} is too large: a perturbed action overflows; "
-                                 "give a number of the size of the action range")
-
-    @staticmethod
-    def _grid(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-        coordinates = grid_coordinates(shape)
-        return coordinates, grid_distances(coordinates)
-
-    def _initial_generators(self) -> list[np.random.Generator]:
-        return [initial_generator(self.seed, trial_id) for trial_id in self.trial_ids]
-
-    def _initial_input_weights(self, rng: np.random.Generator) -> np.ndarray:
-        low, high = self.observation_low, self.observation_high
-        if self.config.input_init is not None:
-            low = np.full_like(low, self.config.input_init[0])
-            high = np.full_like(high, self.config.input_init[1])
-        return low + (high - low) * rng.random((self.input_grid.shape[0], self.obs_dim))
+    @property
+    def periodic_dimensions(self) -> np.ndarray:
+        """The action dimensions this learner wraps round, ``(action_dim,)`` bools (none by default)."""
+        return np.zeros(self.action_dim, dtype=np.bool_)
 
     def _open_streams(self, width: int) -> None:
         self._streams = UniformStreams(self.seed, self.trial_ids, "learner", width)
 
     # -- checks ---------------------------------------------------------------------------------
-    # These run on every step, so they are lean: no copy of an array that is already float64, and
-    # (with ``finite=False``) the NaN/inf scan is left to the compiled kernel, which does it
-    # before it changes anything.
+    # These run on every step, so they are lean: no copy of an array that is already float64.
     @staticmethod
     def _floats(name: str, value) -> np.ndarray:
         if type(value) is np.ndarray and value.dtype == np.float64:
             return value
         return real_array(name, value)
-
-    def _check_observations(self, observations, *, allow_many=False, name="observations",
-                            finite=True) -> np.ndarray:
-        x = self._floats(name, observations)
-        n, d = self.n_trials, self.obs_dim
-        if not (x.shape == (n, d) or (allow_many and x.ndim == 3 and x.shape[0] == n and x.shape[2] == d)):
-            shape = "(n_trials, obs_dim)" + (" or (n_trials, n_obs, obs_dim)" if allow_many else "")
-            raise ValueError(f"{name} must have shape {shape} with n_trials={n}, obs_dim={d}, got {x.shape}")
-        if finite and not np.isfinite(x).all():
-            raise ValueError(f"{name} must be finite, got NaN or inf")
-        return x
 
     def _check_not_pending(self) -> None:
         # A second act() would overwrite the first one's actions before they were learned from.
@@ -293,41 +262,8 @@ class LearnerBase(abc.ABC):
             raise ValueError("act() was called again before learn(): call learn(rewards) for the "
                              "previous actions first (each act() is learned from once)")
 
-    def _check_learn(self, rewards, next_observations, terminal, *, finite=True):
-        """``(rewards, bootstrap, next_observations)`` checked; see ``_check_observations`` for ``finite``."""
-        if not self._pending:
-            raise ValueError("learn() needs a preceding act(): call act(observations) first")
-        r = self._floats("rewards", rewards)
-        if r.shape != (self.n_trials,):
-            raise ValueError(f"rewards must have shape (n_trials,) = ({self.n_trials},), got {r.shape}")
-        if finite and not np.isfinite(r).all():
-            raise ValueError("rewards must be finite, got NaN or inf")
-        if terminal is True:
-            bootstrap = self._no_bootstrap
-        else:
-            done = np.asarray(terminal)
-            if done.dtype != np.bool_ or done.shape not in ((), (self.n_trials,)):
-                raise ValueError(f"terminal must be a bool or {self.n_trials} bools, got {terminal!r}")
-            bootstrap = self._no_bootstrap
-            if self.config.gamma > 0.0:
-                bootstrap = ~np.broadcast_to(done, (self.n_trials,))
-        if next_observations is None:
-            if bootstrap is not self._no_bootstrap and bootstrap.any():
-                raise ValueError("next_observations (n_trials, obs_dim) are needed when gamma > 0 and "
-                                 "a trial is not terminal")
-            return r, bootstrap, self._observations
-        x_next = self._check_observations(next_observations, name="next_observations", finite=finite)
-        return r, bootstrap, x_next
-
-    def _epsilons(self, epsilon: float) -> np.ndarray:
-        """The perturbation scale of each action dimension, ``(action_dim,)``."""
-        if self.config.epsilon_relative:
-            return epsilon * (self.action_high - self.action_low)
-        self._epsilon_buffer.fill(epsilon)
-        return self._epsilon_buffer
-
     def _current(self) -> dict[str, float]:
-        # Seven schedule values, computed once per step (act and learn share them).
+        # The schedule values, computed once per step (act and learn share them).
         if self._current_t != self.t:
             self._current_values = {name: getattr(self.config, name).value(self.t)
                                     for name in self.config.SCHEDULES}

@@ -54,13 +54,15 @@ def write(learner: Any, path: str | os.PathLike, arrays: dict[str, np.ndarray]) 
     atomic_save_npz(path, meta=np.array(json.dumps(meta)), stream_buffer=streams["buffer"], **arrays)
 
 
-def check_meta(meta: Any, path: str | os.PathLike, kinds: tuple[str, ...] | None = None) -> dict[str, Any]:
+def check_meta(meta: Any, path: str | os.PathLike) -> dict[str, Any]:
     """The meta JSON of a learner file, checked key by key; ValueError naming the file and the key.
+
+    The kind is checked to be a string only: the registry (``somarm.learners.load``) says whether
+    it is a known one.
 
     Args:
       meta: the parsed JSON.
       path: the file, for the message.
-      kinds: the known learner kinds (None: any string; the registry checks the kind itself).
     """
     if not isinstance(meta, dict):
         raise ValueError(f"{path} is a damaged learner file: its meta is a JSON {type(meta).__name__}, "
@@ -70,8 +72,6 @@ def check_meta(meta: Any, path: str | os.PathLike, kinds: tuple[str, ...] | None
         if key not in meta or not isinstance(value, types) or (bool not in types and isinstance(value, bool)):
             found = "missing" if key not in meta else f"{value!r:.40}"
             raise ValueError(f"{path} is a damaged learner file: meta {key!r} must be {what}, got {found}")
-    if kinds is not None and meta["kind"] not in kinds:
-        raise ValueError(f"{path} holds no known learner kind; allowed: {', '.join(kinds)}")
     missing = [key for key in _STREAM_KEYS if key not in meta["streams"]]
     if missing:
         raise ValueError(f"{path} is a damaged learner file: meta 'streams' lacks {', '.join(missing)}")

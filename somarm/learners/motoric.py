@@ -29,7 +29,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from somarm.learners.base import ConfigBase, LearnerBase, validate_common
+from somarm.learners.base import ConfigBase, validate_common
+from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import neighbourhood, update, winners
 
@@ -85,7 +86,7 @@ class MotoricConfig(ConfigBase):
         return cls(**values, neighbourhood_values=table.neighbourhood_q)
 
 
-class MotoricMap(LearnerBase):
+class MotoricMap(MapLearner):
     """The Motoric Map for ``n_trials`` independent trials (conforms to ``somarm.protocols.Learner``).
 
     Same keywords and verbs as ``somarm.learners.somq.SOMQ``. ``action_weights`` is
@@ -95,9 +96,19 @@ class MotoricMap(LearnerBase):
 
     kind = "motoric"
     config_class = MotoricConfig
-    _STATE_ARRAYS = ("input_weights", "action_weights", "values")
+    learned_arrays = ("input_weights", "action_weights", "values")
+    _STATE_ARRAYS = learned_arrays
 
-    def _build(self) -> None:
+    @classmethod
+    def memory_needed(cls, config: MotoricConfig, *, n_trials: int, obs_dim: int,
+                      action_dim: int) -> tuple[str, float]:
+        """The input grid's distances, and per trial the input weights, private actions and values."""
+        n_s = int(np.prod(config.input_shape))
+        n_floats = grid_floats(config.input_shape) + n_trials * (n_s * obs_dim + n_s * action_dim + n_s)
+        return (f"a motoric learner with input_shape={shape_text(config.input_shape)} and {n_trials} trial(s)",
+                8.0 * n_floats)
+
+    def _build_maps(self) -> None:
         n_units = self.input_grid.shape[0]
         self.action_grid = self.input_grid
         self.action_weights = np.empty((self.n_trials, n_units, self.action_dim))

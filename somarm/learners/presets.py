@@ -339,7 +339,7 @@ def get_motoric(name: str) -> MotoricConfig:
 
 
 def config_for(kind: str, name: str):
-    """The config of learner ``kind`` (see ``somarm.learners.KINDS``) for preset ``name``.
+    """The config of learner ``kind`` (see ``somarm.learners.LEARNERS``) for preset ``name``.
 
     Raises:
       ValueError: an unknown kind or name (the message lists what is allowed).

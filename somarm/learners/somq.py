@@ -33,7 +33,8 @@ from typing import Literal
 import numpy as np
 
 from somarm.learners import _kernels, interpolation
-from somarm.learners.base import ConfigBase, LearnerBase, validate_common
+from somarm.learners.base import ConfigBase, validate_common
+from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import winners
 
@@ -102,7 +103,7 @@ def row_width(config: SOMQConfig, action_dim: int) -> int:
     return 3 + action_dim * (2 if config.noise == "gaussian" else 1)
 
 
-class SOMQ(LearnerBase):
+class SOMQ(MapLearner):
     """SOM-Q for ``n_trials`` independent trials (conforms to ``somarm.protocols.Learner``).
 
     Args:
@@ -122,8 +123,20 @@ class SOMQ(LearnerBase):
 
     kind = "somq"
     config_class = SOMQConfig
+    has_action_map = True
+    learned_arrays = ("input_weights", "action_weights", "q")
 
-    def _build(self) -> None:
+    @classmethod
+    def memory_needed(cls, config: SOMQConfig, *, n_trials: int, obs_dim: int,
+                      action_dim: int) -> tuple[str, float]:
+        """Both maps' grid distances, and per trial the weights of both maps and Q (see ``LearnerBase``)."""
+        n_s, n_a = int(np.prod(config.input_shape)), int(np.prod(config.action_shape))
+        n_floats = grid_floats(config.input_shape) + grid_floats(config.action_shape)
+        n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
+        return (f"a somq learner with input_shape={shape_text(config.input_shape)}, action_shape="
+                f"{shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
+
+    def _build_maps(self) -> None:
         cfg = self.config
         self.action_grid, self._distances_a = self._grid(cfg.action_shape)
         n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
@@ -149,7 +162,7 @@ class SOMQ(LearnerBase):
 
     _STATE_ARRAYS = ("input_weights", "action_weights", "q")
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
-    _PENDING_ARRAYS = LearnerBase._PENDING_ARRAYS + ("_shifted",)
+    _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted",)
     # Files saved before ``_shifted`` existed load with it all False: nothing shifts (the winner response).
     _OPTIONAL_ARRAYS = ("_shifted",)
 

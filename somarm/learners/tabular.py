@@ -22,17 +22,14 @@ values per joint give 10^6 actions, which is why a fixed grid cannot stand in fo
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from somarm.learners import file as learner_file
-from somarm.learners.base import ConfigBase
+from somarm.learners.base import ConfigBase, LearnerBase
 from somarm.learners.schedules import InverseDecay, Schedule
-from somarm.streams import UniformStreams, trial_ids_for
-from somarm.validation import check_bounds, check_int, check_number, check_periodic
+from somarm.validation import check_int, check_number
 
 __all__ = ["TabularConfig", "TabularQ", "MAX_TABLE_ENTRIES"]
 
@@ -78,14 +75,15 @@ class TabularConfig(ConfigBase):
         return cls(epsilon=table.p, gamma=table.gamma)
 
 
-class TabularQ:
+class TabularQ(LearnerBase):
     """Tabular Q-learning over fixed grids for ``n_trials`` trials (``somarm.protocols.Learner``).
 
     Args:
       config: a ``TabularConfig``.
       observation_low, observation_high: the observation box, ``(obs_dim,)`` each.
       action_low, action_high: the action box, ``(action_dim,)`` each.
-      action_periodic: which action dimensions are angles, ``(action_dim,)`` bools (saved, not used).
+      action_periodic: which action dimensions are angles, ``(action_dim,)`` bools (saved, not used:
+        the grid's cells are the same whether or not an angle wraps).
       n_trials: independent trials advanced together (>= 1).
       seed: the run's seed. trial_ids: which trials of the run these are (``[7]`` replays trial 7).
 
@@ -95,23 +93,19 @@ class TabularQ:
 
     kind = "tabular"
     config_class = TabularConfig
-    _ARRAYS = ("q", "counts", "_cells", "_choices")
+    learned_arrays = ("q",)
+    _STATE_ARRAYS = ("q", "counts")
+    _PENDING_ARRAYS = ("_cells", "_choices")
+    _MEMORY_HINT = "use fewer bins or fewer trials"
 
-    def __init__(self, config: TabularConfig, *, observation_low, observation_high, action_low, action_high,
-                 n_trials: int = 1, seed: int = 0, trial_ids=None, action_periodic=None):
-        if not isinstance(config, TabularConfig):
-            raise ValueError(f"config must be a TabularConfig, got {type(config).__name__}")
-        self.config = config
-        self.observation_low, self.observation_high = check_bounds("observation", observation_low,
-                                                                   observation_high)
-        self.action_low, self.action_high = check_bounds("action", action_low, action_high)
-        # Kept for the file only: the grid's cells are the same whether or not an angle wraps.
-        self.action_periodic = check_periodic(action_periodic, self.action_low.size)
-        self.n_trials = check_int("n_trials", n_trials)
-        self.seed = check_int("seed", seed, minimum=0)
-        self.trial_ids = trial_ids_for(self.n_trials, trial_ids)
-        obs_dim, action_dim = self.observation_low.size, self.action_low.size
-        self._cell_strides = config.observation_bins ** np.arange(obs_dim - 1, -1, -1, dtype=np.int64)
+    @classmethod
+    def memory_needed(cls, config: TabularConfig, *, n_trials: int, obs_dim: int,
+                      action_dim: int) -> tuple[str, float]:
+        """Per trial Q and the visit counts (8 bytes an entry each), and the action table.
+
+        Raises:
+          ValueError: a table above ``MAX_TABLE_ENTRIES`` per trial (one line).
+        """
         n_cells = config.observation_bins ** obs_dim
         n_actions = config.action_bins ** action_dim
         if n_cells * n_actions > MAX_TABLE_ENTRIES:
@@ -120,6 +114,15 @@ class TabularQ:
                 f"dimensions has {float(n_actions):.3g} actions x {n_cells} observation cells = "
                 f"{float(n_cells) * n_actions:.3g} table entries; at most {MAX_TABLE_ENTRIES:.0e} are allowed "
                 f"(use fewer bins, or somq, whose action map does not grow with the dimension)")
+        n_floats = n_trials * 2 * n_cells * n_actions + n_actions * action_dim
+        return (f"a tabular learner with observation_bins={config.observation_bins}, action_bins="
+                f"{config.action_bins} and {n_trials} trial(s)", 8.0 * n_floats)
+
+    def _build(self) -> None:
+        config, obs_dim, action_dim = self.config, self.obs_dim, self.action_dim
+        self._cell_strides = config.observation_bins ** np.arange(obs_dim - 1, -1, -1, dtype=np.int64)
+        n_cells = config.observation_bins ** obs_dim
+        n_actions = config.action_bins ** action_dim
         # Action k's values: its per-dimension indices (C order) at the interval centres.
         centres = (np.arange(config.action_bins) + 0.5) / config.action_bins
         index = np.indices((config.action_bins,) * action_dim).reshape(action_dim, -1).T
@@ -129,9 +132,7 @@ class TabularQ:
         self._cells = np.zeros(self.n_trials, dtype=np.int64)
         self._choices = np.zeros(self.n_trials, dtype=np.int64)
         self._rows = np.arange(self.n_trials)
-        self._streams = UniformStreams(self.seed, self.trial_ids, "learner", 2)
-        self._pending = False
-        self.t = 0
+        self._open_streams(2)
 
     @property
     def n_cells(self) -> int:
@@ -210,39 +211,3 @@ class TabularQ:
     def predict(self, observations) -> np.ndarray:
         """Greedy actions: ``(n_trials, [n_obs,] obs_dim) -> (n_trials, [n_obs,] action_dim)``; nothing drawn."""
         return self.actions[self._greedy(self.cells(observations))]
-
-    def parameters(self) -> dict[str, float]:
-        """The current exploration probability (at step ``t``)."""
-        return {"epsilon": self.config.epsilon.value(self.t)}
-
-    def save(self, path: str | os.PathLike) -> None:
-        """Write the whole state (config, tables, step, random streams) atomically to ``path``."""
-        learner_file.write(self, path, {name: getattr(self, name) for name in self._ARRAYS})
-
-    @classmethod
-    def load(cls, path: str | os.PathLike) -> TabularQ:
-        """Reopen a learner written by ``save``; it continues exactly where it stopped.
-
-        Raises:
-          ValueError: the file is missing, unreadable, damaged or holds another kind of learner
-            (one line naming the file).
-        """
-        meta, arrays = learner_file.read_file(path)
-        missing = [name for name in (*cls._ARRAYS, "stream_buffer") if name not in arrays]
-        if missing:
-            raise ValueError(f"{path} is a damaged learner file: array {missing[0]!r} is missing")
-        if meta.get("kind") != cls.kind:
-            raise ValueError(f"{path} holds a {meta.get('kind')} learner, not {cls.kind}")
-        low_s, high_s, low_a, high_a = meta["bounds"]
-        try:
-            learner = cls(TabularConfig.from_dict(meta["config"]), observation_low=low_s,
-                          observation_high=high_s, action_low=low_a, action_high=high_a,
-                          n_trials=meta["n_trials"], seed=meta["seed"], trial_ids=meta["trial_ids"],
-                          action_periodic=meta.get("periodic"))
-            for name in cls._ARRAYS:
-                getattr(learner, name)[...] = arrays[name]
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"{path} is a damaged learner file: {exc}") from None
-        learner.t, learner._pending = int(meta["t"]), bool(meta["pending"])
-        learner._streams.set_state({**meta["streams"], "buffer": arrays["stream_buffer"]})
-        return learner

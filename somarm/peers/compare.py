@@ -99,7 +99,7 @@ def check(config: CompareConfig) -> list[str]:
       ValueError: an unknown task or learner, bad counts, a learner that cannot take the task
         (tabular on reach20), or TD3/SAC without the ``peers`` extra.
     """
-    from somarm.learners import make_learner
+    from somarm import learners
     from somarm.validation import check_int
 
     for name in ("samples", "seeds", "observations"):
@@ -118,7 +118,7 @@ def check(config: CompareConfig) -> list[str]:
     for kind in config.learners:
         if kind in OURS:
             try:
-                make_learner(kind, _our_config(kind, config.task), **_bounds(task))
+                learners.make(kind, _our_config(kind, config.task), **_bounds(task))
             except ValueError as exc:
                 raise ValueError(f"{kind} cannot learn {config.task}: {exc}") from None
     if any(k in PEERS for k in config.learners) and (reason := peers_missing()):
@@ -133,13 +133,13 @@ def _score(predict, task, observations: np.ndarray) -> float:
 
 def _run_ours(kind: str, config: CompareConfig, seed: int, rungs: list[int], observations: np.ndarray,
               *, warm_up: bool = False):
-    from somarm.learners import make_learner
+    from somarm import learners
 
     task = tasks.make(config.task, seed=seed, **config.task_params)
     settings = _our_config(kind, config.task)
-    learner = make_learner(kind, settings, **_bounds(task), seed=seed)
+    learner = learners.make(kind, settings, **_bounds(task), seed=seed)
     if warm_up:  # untimed: numba compiles SOM-Q's kernels on first use
-        spare = make_learner(kind, settings, **_bounds(task), seed=seed)
+        spare = learners.make(kind, settings, **_bounds(task), seed=seed)
         spare.learn(task.evaluate(observations[:1], spare.act(observations[:1])))
         spare.predict(observations[None, :2])
     errors, walls, wall, done = [], [], 0.0, 0
@@ -149,8 +149,7 @@ def _run_ours(kind: str, config: CompareConfig, seed: int, rungs: list[int], obs
             learner.learn(task.step(learner.act(task.reset())))
         wall += time.perf_counter() - start
         done = rung
-        if hasattr(task, "set_step"):
-            task.set_step(done)  # moving goals (four_goals): score in the phase reached
+        task.set_step(done)  # moving goals (four_goals): score in the phase reached
         errors.append(_score(lambda x: learner.predict(x[None])[0], task, observations))
         walls.append(wall)
     return errors, walls, settings.to_dict()

@@ -63,11 +63,12 @@ def check_memory_needs(configs: list[RunConfig]) -> None:
     Raises:
       ValueError: one line naming the settings and the size.
     """
-    from somarm.learners.base import memory_needed
+    from somarm import learners
 
     total, described = 0.0, []
     for config in configs:
-        what, n_bytes = memory_needed(config.learner, config.learner_config, config.n_trials, 1, 1)
+        what, n_bytes = learners.memory_needed(config.learner, config.learner_config, n_trials=config.n_trials,
+                                               obs_dim=1, action_dim=1)
         total += n_bytes + (16.0 * (config.n_steps // config.block) + _STREAM_BYTES_PER_TRIAL) * config.n_trials
         described.append(what)
     check_memory(f"{'; '.join(described)}, over {configs[0].n_steps} steps", total,

@@ -45,7 +45,7 @@ class RunConfig:
     learner: str = field(default="somq", metadata=_option(
         "--learner", "learner kind: somq (the paper's model), motoric (the Fig. 13 B baseline) or tabular (a fixed grid)",
         metavar="KIND"))
-    """A kind of ``somarm.learners.KINDS``: ``somq`` (the paper's model), ``motoric`` (Fig. 13 B) or ``tabular``."""
+    """A kind of ``somarm.learners.LEARNERS``: ``somq`` (the paper's model), ``motoric`` (Fig. 13 B) or ``tabular``."""
     preset: str | None = field(default=None, metadata=_option(
         "--preset", "parameter table (see `somarm presets`); default: the task's", metavar="TABLE"))
     """Parameter table by name (``table1`` ...); None takes the task's default."""
@@ -156,7 +156,7 @@ class RunConfig:
 
         if self.learner_config is None:
             return True
-        if self.learner not in learners.KINDS or self.preset not in presets.PRESETS:
+        if self.learner not in learners.LEARNERS or self.preset not in presets.PRESETS:
             return False
         try:
             return presets.config_for(self.learner, self.preset).with_changes(self.overrides) == self.learner_config
@@ -202,8 +202,8 @@ def _config_class(kind: str) -> type:
     """The config class of learner ``kind``; ValueError listing the kinds."""
     from somarm import learners
 
-    if kind not in learners.KINDS:
-        raise ValueError(f"unknown learner {kind!r}; allowed: {', '.join(learners.KINDS)}")
+    if kind not in learners.LEARNERS:
+        raise ValueError(f"unknown learner {kind!r}; allowed: {', '.join(learners.LEARNERS)}")
     return learners.config_class(kind)
 
 

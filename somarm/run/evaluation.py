@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from somarm.protocols import BatchedTask, Learner
+from somarm.protocols import BatchedTask, EpisodicTask, Learner
 from somarm.streams import PURPOSES
 from somarm.validation import check_int
 
@@ -40,7 +40,7 @@ def evaluate_greedy(
     return task.evaluate(batch, actions).mean(axis=-1)
 
 
-def greedy_episodes(learner: Learner, task, *, n_episodes: int = 100, seed: int = 0) -> dict[str, np.ndarray]:
+def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 100, seed: int = 0) -> dict[str, np.ndarray]:
     """Each trial's greedy policy run for whole episodes of a multi-step task (``task.episodic``).
 
     Every trial starts the same ``n_episodes`` start poses (the evaluation stream of ``seed``);
@@ -48,7 +48,7 @@ def greedy_episodes(learner: Learner, task, *, n_episodes: int = 100, seed: int 
 
     Args:
       learner: a trained learner with ``n_trials`` trials.
-      task: a multi-step task with ``run_episodes`` and ``sample_observations``.
+      task: a multi-step task (``task.episodic``: an ``EpisodicTask``).
       n_episodes: episodes per trial (>= 1).
       seed: seed of the evaluation stream.
 
@@ -59,7 +59,7 @@ def greedy_episodes(learner: Learner, task, *, n_episodes: int = 100, seed: int 
     Raises:
       ValueError: a task without whole episodes, or a bad ``n_episodes``.
     """
-    if not getattr(task, "episodic", False):
+    if not task.episodic:
         raise ValueError(f"task {task.name} has one-step episodes; greedy episodes need a multi-step task")
     n_episodes = check_int("n_episodes", n_episodes)
     starts = task.sample_observations(evaluation_rng(seed), n_episodes)

@@ -14,10 +14,11 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
-from somarm.protocols import BatchedTask, Learner
+from somarm.protocols import BatchedTask, EpisodicTask, Learner
 from somarm.run.progress import Progress
 from somarm.run.stopping import stop_between_steps
 from somarm.tasks.base import step_together
@@ -29,9 +30,8 @@ StepHook = Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]
 
 
 def snapshot(learner: Learner) -> dict[str, np.ndarray]:
-    """Copies of a learner's maps and values (whichever it has) for figures mid-run."""
-    names = ("input_weights", "action_weights", "q", "values")
-    return {n: np.array(getattr(learner, n)) for n in names if hasattr(learner, n)}
+    """Copies of the arrays that show what a learner has learned (its ``learned_arrays``), for figures mid-run."""
+    return {name: np.array(getattr(learner, name)) for name in learner.learned_arrays}
 
 
 @dataclass
@@ -105,7 +105,7 @@ def loop(
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in learners]
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
-    episodic = [bool(getattr(t, "episodic", False)) for t in tasks]  # multi-step episodes (reach2_obstacle)
+    episodic = [t.episodic for t in tasks]  # multi-step episodes (reach2_obstacle): EpisodicTasks
     # The lanes other than the first run in their own threads; each owns its tasks and learners,
     # so every trial sees the same arithmetic in the same order as with one lane. Whether a step
     # is faster in lanes or in this thread alone (all tasks, one physics call on the batch's own
@@ -131,7 +131,8 @@ def loop(
             for j in learner_ids:
                 i, part = owners[j], parts[j]
                 if episodic[i]:  # the next state and whether the episode ended there
-                    learners[j].learn(rewards_of[i][part], tasks[i].next_observations[part], tasks[i].terminal[part])
+                    done = cast(EpisodicTask, tasks[i])
+                    learners[j].learn(rewards_of[i][part], done.next_observations[part], done.terminal[part])
                 else:
                     learners[j].learn(rewards_of[i][part])
 

@@ -32,7 +32,7 @@ def greedy_summary(result: RunResult, n_observations: int = 1000) -> dict[str, A
         "greedy_sd_reward": float(greedy.std()),
         "greedy_observations": n_observations,
     }
-    if getattr(result.task, "episodic", False):  # whole greedy episodes from the task's start poses
+    if result.task.episodic:  # whole greedy episodes from the task's start poses
         episodes = evaluation.greedy_episodes(result.learner, result.task, n_episodes=100,
                                               seed=result.config.seed)
         lengths = episodes["mean_length"][np.isfinite(episodes["mean_length"])]

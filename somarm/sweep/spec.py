@@ -238,7 +238,7 @@ def preset_value(spec: SweepSpec, key: str) -> str | None:
 
     if key.startswith(TASK_PREFIX):
         name = key[len(TASK_PREFIX):]
-        fields = {f.name: f for f in dataclasses.fields(tasks.params_type(spec.task))}
+        fields = {f.name: f for f in dataclasses.fields(tasks.record(spec.task).params)}
         if name not in fields or fields[name].default is dataclasses.MISSING:
             return None
         return json.dumps(fields[name].default)

@@ -11,9 +11,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 
-import numpy as np
-
-from somarm import run
+from somarm import learners, run
 from somarm.run.config import RunConfig
 from somarm.sweep.spec import SweepSpec, config_key
 
@@ -65,12 +63,11 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
             raise ValueError(f"sweep point {point_label(point)}: {exc}") from None
 
 
-def _bytes_per_point(config: RunConfig) -> int:
-    """Rough memory of one point's learner (maps, Q and working arrays of all its trials)."""
-    learner = config.learner_config
-    n_in, n_act = int(np.prod(learner.input_shape)), int(np.prod(learner.action_shape))
-    per_trial = n_in * 4 + n_act * 4 + n_in * n_act  # weights (up to 4 dims) and Q
-    return 8 * (config.n_trials * per_trial + n_in * n_in + n_act * n_act) * 3
+def _bytes_per_point(config: RunConfig) -> float:
+    """Rough memory of one point's learner: its kind's own estimate (``learners.memory_needed``, the
+    lower bound ``run.check_memory_needs`` uses), three times over for the working arrays."""
+    return 3.0 * learners.memory_needed(config.learner, config.learner_config, n_trials=config.n_trials,
+                                        obs_dim=1, action_dim=1)[1]
 
 
 def plan_chunks(

@@ -22,7 +22,7 @@ from typing import Any
 
 from somarm.tasks.record import BACKENDS, TaskRecord
 
-__all__ = ["names", "describe", "record", "records", "params_type", "parse_params", "format_param", "check_params",
+__all__ = ["names", "record", "records", "parse_params", "format_param", "check_params",
            "check_backend", "load", "make", "set_threads", "threads", "TaskRecord", "BACKENDS"]
 
 #: The modules holding task records (each defines ``RECORDS``); a new task module adds one line.
@@ -53,20 +53,6 @@ def record(name: str) -> TaskRecord:
     if name not in records():
         raise ValueError(f"unknown task {name!r}; tasks: {', '.join(records())}")
     return _RECORDS[name]
-
-
-def describe(name: str) -> str:
-    """One line describing task ``name``.
-
-    Raises:
-      ValueError: unknown name (the names are listed).
-    """
-    return record(name).summary
-
-
-def params_type(name: str) -> type:
-    """The frozen dataclass holding task ``name``'s parameters."""
-    return record(name).params
 
 
 def parse_params(name: str, texts: dict[str, str]) -> dict[str, Any]:
@@ -135,7 +121,7 @@ def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend
       seed: the run's seed; trial i's observations come from stream (seed, "task", trial id).
       trial_ids: explicit trial indices (e.g. ``[7]`` replays trial 7 alone).
       backend: "mujoco" (default) or "analytic" (closed forms).
-      **params: fields of the task's params dataclass (``params_type(name)``).
+      **params: fields of the task's params dataclass (``record(name).params``).
 
     Raises:
       ValueError: unknown task, unknown parameter, parameter out of range, unknown backend.
@@ -166,7 +152,7 @@ def load(name: str, *, seed: int = 0, **params: Any):
 
     physics, task = record(name).environment(make(name, seed=seed, **params))
     # A driven arm integrates several timesteps per action (actuated reach, reach2_obstacle).
-    return control.Environment(physics, task, n_sub_steps=getattr(task, "sub_steps", 1))
+    return control.Environment(physics, task, n_sub_steps=task.sub_steps)
 
 
 def threads() -> int:

@@ -1,6 +1,9 @@
-"""What every one-step task shares: batched episodes from per-trial streams, checks, dm_env glue.
+"""What every task shares: the declared members with their defaults; for the one-step tasks, batched
+episodes from per-trial streams, checks and dm_env glue.
 
-A task is defined once, by a subclass of ``OneStepTask`` that says how uniforms become
+``TaskBase`` holds what every batched task declares (``somarm.protocols.BatchedTask``): a step
+counter and ``set_step``, whether its episodes last several steps (``episodic``) and whether
+servos drive its joints (``actuated``), its dimensions. A one-step task is defined once, by a subclass of ``OneStepTask`` that says how uniforms become
 observations and how observations and actions become rewards. The batched interface is that
 class itself; the dm_env interface (``OneStepEnvTask``) draws its observations from the same
 stream as trial ``trial_id`` of the batch and computes its reward from its own MuJoCo physics.
@@ -19,7 +22,7 @@ from somarm.streams import UniformStreams, trial_ids_for
 from somarm.tasks.record import BACKENDS
 from somarm.validation import real_array
 
-__all__ = ["Backend", "BACKENDS", "OneStepTask", "OneStepEnvTask", "check_actions", "step_together"]
+__all__ = ["Backend", "BACKENDS", "TaskBase", "OneStepTask", "OneStepEnvTask", "check_actions", "step_together"]
 
 Backend = Literal["mujoco", "analytic"]
 
@@ -49,40 +52,25 @@ def _fmt(values: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
 
 
-class OneStepTask:
-    """Batched one-step episodes for ``n_trials`` independent trials (``BatchedTask``).
+class TaskBase:
+    """What every batched task declares, with the defaults of a one-step task (``BatchedTask``).
 
-    Subclasses set ``name``, the bounds, ``uniform_width`` and implement ``observations_from``
-    and ``rewards``; everything else (streams, counters, checks) lives here.
-
-    Args:
-      params: the task's frozen parameters.
-      n_trials: independent trials. seed: the run's seed. trial_ids: explicit trial indices
-        (trial i sees the same observations alone or in a batch). backend: "mujoco" or "analytic".
+    A subclass sets ``name``, ``n_trials``, the bounds and ``t``, and says where it differs from
+    the defaults: ``episodic`` (multi-step episodes: it is then an ``EpisodicTask``), ``actuated``
+    (servo-driven joints), ``action_periodic`` (angles over one full turn).
     """
 
-    name: ClassVar[str]
-    uniform_width: ClassVar[int]  #: uniforms drawn per observation
+    name: str
+    n_trials: int
     observation_low: np.ndarray
     observation_high: np.ndarray
     action_low: np.ndarray
     action_high: np.ndarray
-
-    def __init__(self, params: Any, *, n_trials: int = 1, seed: int = 0,
-                 trial_ids: np.ndarray | None = None, backend: Backend = "mujoco"):
-        if backend not in BACKENDS:
-            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
-        self.params = params
-        self.backend = backend
-        self.trial_ids = trial_ids_for(n_trials, trial_ids)
-        self.n_trials = int(self.trial_ids.size)
-        self.seed = seed
-        self._streams = UniformStreams(seed, self.trial_ids, "task", self.uniform_width)
-        self._observations: np.ndarray | None = None
-        self.t = 0  #: steps taken (the learner's t)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.params!r}, n_trials={self.n_trials}, backend={self.backend!r})"
+    t: int  #: steps taken (the learner's t)
+    #: Episodes last several steps: ``step`` sets ``next_observations``, ``terminal`` and ``truncated``.
+    episodic: ClassVar[bool] = False
+    #: The joints are servo-driven: an action is a target they track over time.
+    actuated: bool = False
 
     @property
     def observation_dim(self) -> int:
@@ -109,6 +97,37 @@ class OneStepTask:
         if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or t < 0:
             raise ValueError(f"t must be a whole number >= 0, got {t!r}")
         self.t = int(t)
+
+
+class OneStepTask(TaskBase):
+    """Batched one-step episodes for ``n_trials`` independent trials (``BatchedTask``).
+
+    Subclasses set ``name``, the bounds, ``uniform_width`` and implement ``observations_from``
+    and ``rewards``; everything else (streams, counters, checks) lives here.
+
+    Args:
+      params: the task's frozen parameters.
+      n_trials: independent trials. seed: the run's seed. trial_ids: explicit trial indices
+        (trial i sees the same observations alone or in a batch). backend: "mujoco" or "analytic".
+    """
+
+    uniform_width: ClassVar[int]  #: uniforms drawn per observation
+
+    def __init__(self, params: Any, *, n_trials: int = 1, seed: int = 0,
+                 trial_ids: np.ndarray | None = None, backend: Backend = "mujoco"):
+        if backend not in BACKENDS:
+            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
+        self.params = params
+        self.backend = backend
+        self.trial_ids = trial_ids_for(n_trials, trial_ids)
+        self.n_trials = int(self.trial_ids.size)
+        self.seed = seed
+        self._streams = UniformStreams(seed, self.trial_ids, "task", self.uniform_width)
+        self._observations: np.ndarray | None = None
+        self.t = 0  #: steps taken (the learner's t)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.params!r}, n_trials={self.n_trials}, backend={self.backend!r})"
 
     # -- what a task defines -------------------------------------------------------------
     def observations_from(self, uniforms: np.ndarray) -> np.ndarray:
@@ -219,6 +238,8 @@ class OneStepEnvTask(control.Task):
     with the same seed; the subclass writes it into the physics (goal or target marker,
     launch parameters), applies the action and reads the reward back from the physics.
     """
+
+    sub_steps = 1  #: timesteps per dm_env step (``tasks.load`` reads it); a driven arm integrates more
 
     def __init__(self, batched: OneStepTask, *, observation_key: str):
         self.batched = batched

@@ -29,7 +29,7 @@ from dm_env import specs
 
 from somarm.streams import trial_generators, trial_ids_for
 from somarm.tasks import actuation, arms
-from somarm.tasks.base import check_actions
+from somarm.tasks.base import TaskBase, check_actions
 from somarm.tasks.pool import threads_here
 from somarm.tasks.record import TaskRecord
 
@@ -77,8 +77,8 @@ def moves(max_step: float) -> np.ndarray:
     return np.stack(np.meshgrid(grid, grid, indexing="ij"), axis=-1).reshape(-1, 2)
 
 
-class Obstacle:
-    """Batched multi-step episodes of ``reach2_obstacle`` (``BatchedTask`` plus episode flags).
+class Obstacle(TaskBase):
+    """Batched multi-step episodes of ``reach2_obstacle`` (``somarm.protocols.EpisodicTask``).
 
     Args:
       params: an ``ObstacleParams``.
@@ -91,6 +91,7 @@ class Obstacle:
 
     name = "reach2_obstacle"
     episodic = True  #: episodes last several steps: ``step`` sets ``next_observations``/``terminal``
+    actuated = True  #: the servos track each step's targets for ``control_interval``
     goal = GOAL  #: where the fingertip must go, (x, y)
 
     def __init__(self, params: ObstacleParams, *, n_trials: int = 1, seed: int = 0,
@@ -103,7 +104,7 @@ class Obstacle:
         self._generators = trial_generators(seed, self.trial_ids, "task")
         self.observation_low, self.observation_high = np.full(2, -np.pi), np.full(2, np.pi)
         self.action_low, self.action_high = np.full(2, -params.max_step), np.full(2, params.max_step)
-        self.action_periodic = np.zeros(2, dtype=np.bool_)  #: the actions are angle steps, not angles
+        # action_periodic stays TaskBase's none: the actions are angle steps, not angles.
         self.control_steps = actuation.steps_of(params.control_interval, arms.TIMESTEP)
         self._qpos = np.zeros((self.n_trials, 2))
         self._qvel = np.zeros((self.n_trials, 2))
@@ -117,18 +118,6 @@ class Obstacle:
 
     def __repr__(self) -> str:
         return f"Obstacle({self.params!r}, n_trials={self.n_trials})"
-
-    def set_step(self, step: int) -> None:
-        """Move the step counter to ``step`` (nothing of this task depends on it)."""
-        self.t = int(step)
-
-    @property
-    def observation_dim(self) -> int:
-        return 2
-
-    @property
-    def action_dim(self) -> int:
-        return 2
 
     # -- physics -------------------------------------------------------------------------
     def _servos(self, n: int) -> actuation.Servos:
@@ -338,6 +327,6 @@ RECORDS = (
         observation_labels=("theta1 (rad)", "theta2 (rad)"),
         action_labels=("change of theta1's target (normalised)", "change of theta2's target (normalised)"),
         backends=("mujoco",),
-        episodic=True,
+        episodic=Obstacle.episodic,  # the class owns the fact; the record lists it without building a task
     ),
 )

@@ -109,6 +109,7 @@ class Reach(OneStepTask):
 
     @property
     def actuated(self) -> bool:
+        """``dynamics=actuated``: the joints' servos track the actions as targets."""
         return self.params.dynamics == "actuated"
 
     @property
@@ -152,13 +153,13 @@ class ArmEnvTask(OneStepEnvTask):
 
     def apply_action(self, physics: arms.ArmPhysics, action: np.ndarray) -> None:
         self._angles = action.copy()
-        if getattr(self.batched, "actuated", False):
+        if self.batched.actuated:
             physics.set_targets(action)
         else:
             physics.set_angles(action)
 
     def after_step(self, physics: arms.ArmPhysics) -> None:
-        if not getattr(self.batched, "actuated", False):
+        if not self.batched.actuated:
             # physics.step ran mj_step from rest with no force; set the pose again so that the
             # fingertip read next is exactly the setpoint's, whatever the integrator did.
             physics.set_angles(self._angles)

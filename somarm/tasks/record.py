@@ -53,8 +53,9 @@ class TaskRecord:
     """Where the rewards can be computed (``make(..., backend=)``); a task without closed forms
     (contacts) has ``mujoco`` only."""
     episodic: bool = False
-    """Episodes last several steps (the task's ``step`` sets ``next_observations``/``terminal``);
-    False for the one-step tasks (``somarm.peers.gym`` adapts those)."""
+    """The task class's ``episodic`` (episodes last several steps: an ``EpisodicTask``), given from
+    the class so that the record lists it without building a task; False for the one-step tasks
+    (``somarm.peers.gym`` adapts those)."""
 
     def params_from(self, given: dict[str, Any]) -> Any:
         """The params of this task with ``given`` fields changed from their defaults.

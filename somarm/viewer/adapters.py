@@ -1,7 +1,7 @@
 """Where the tasks keep goals, targets and flights, read in one place for the viewer.
 
-The viewer asks the task (``task.goals_for``, ``task.conditions``, ``simulate_trajectory``);
-an arm task without ``goals_for`` observes the goal's (x, y) itself.
+The viewer asks the task (``FourGoals.goals_for``, ``Throw.conditions``, ``simulate_trajectory``);
+every other arm task observes the goal's (x, y) itself.
 """
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ __all__ = ["goal_adapter", "throw_adapters"]
 
 def goal_adapter(task) -> Callable[[np.ndarray], np.ndarray] | None:
     """Observation ``(obs_dim,)`` -> goal (x, y) for the arm tasks; None means "the first two values"."""
-    if hasattr(task, "goals_for"):  # four_goals: a quadrant's goal, phase by task.t
+    from somarm.tasks.four_goals import FourGoals
+
+    if isinstance(task, FourGoals):  # a quadrant's goal, phase by task.t
         return lambda observation: np.asarray(task.goals_for(np.asarray(observation)[None]))[0, :2]
     return None
 

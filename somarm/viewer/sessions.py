@@ -98,18 +98,18 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     trial = ids.index(ids[0] if trial is None else trial)  # from here on: the index in the batch
     task_params = {**task_params, **(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
-    task.set_step(int(getattr(learner, "t", 0)))  # four_goals: the goals of the learner's phase
+    task.set_step(int(learner.t))  # four_goals: the goals of the learner's phase
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
-    if getattr(task, "episodic", False):
+    if task.episodic:
         return _episode_session(task_name, task, learner, observations, trial)
     observations = observations[_sweep_order(observations)]
     actions, errors = greedy_answers(task, learner, observations, trial=trial)
     view = tasks.record(task_name).view
     fan = None
-    if view == "fan" and hasattr(learner, "action_weights"):
+    if view == "fan" and learner.has_maps:
         fan = np.asarray(learner.action_weights)[trial]
-    if getattr(task, "actuated", False):  # from the start pose (all zeros) to where the reward is read
+    if task.actuated:  # from the start pose (all zeros) to where the reward is read
         moving = task.reached_angles(actions, path=True)
         paths = [np.vstack([np.zeros((1, task.n_links)), path]) for path in moving]
         return Session(task_name, observations, actions, errors, None,

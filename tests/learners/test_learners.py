@@ -15,14 +15,14 @@ def test_registry():
                                  "tabular": (TabularConfig, TabularQ)}
 
 
-@pytest.mark.parametrize("kind", ["somq", "motoric", "tabular"])
+@pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_make_and_load_any_kind(tmp_path, kind):
-    learner = learners.make_learner(kind, None, n_trials=2, seed=3, **BOX)
+    learner = learners.make(kind, None, n_trials=2, seed=3, **BOX)
     assert learner.kind == kind
     for _ in range(5):
         learner.learn(-learner.act(np.full((2, 2), 0.3))[:, 0])
     learner.save(tmp_path / "learner.npz")
-    loaded = learners.load_learner(tmp_path / "learner.npz")
+    loaded = learners.load(tmp_path / "learner.npz")
     assert type(loaded) is type(learner) and loaded.t == 5
     x = np.random.default_rng(0).random((2, 4, 2))
     np.testing.assert_array_equal(loaded.predict(x), learner.predict(x))
@@ -30,22 +30,22 @@ def test_make_and_load_any_kind(tmp_path, kind):
 
 def test_errors():
     with pytest.raises(ValueError, match="unknown learner kind 'ddpg'; allowed: somq, motoric"):
-        learners.make_learner("ddpg", None, **BOX)
+        learners.make("ddpg", None, **BOX)
     with pytest.raises(ValueError, match="needs a MotoricConfig"):
-        learners.make_learner("motoric", SOMQConfig(), **BOX)
+        learners.make("motoric", SOMQConfig(), **BOX)
     with pytest.raises(ValueError, match="cannot read a learner"):
-        learners.load_learner("/nonexistent/learner.npz")
+        learners.load("/nonexistent/learner.npz")
 
 
 def test_wrong_kind_and_atomic_overwrite(tmp_path):
     path = tmp_path / "l.npz"
-    somq = learners.make_learner("somq", None, **BOX)
+    somq = learners.make("somq", None, **BOX)
     somq.save(path)
     with pytest.raises(ValueError, match="holds a somq learner, not motoric"):
         MotoricMap.load(path)
-    motoric = learners.make_learner("motoric", None, **BOX)
+    motoric = learners.make("motoric", None, **BOX)
     motoric.save(path)  # replaces the file whole
-    assert isinstance(learners.load_learner(path), MotoricMap)
+    assert isinstance(learners.load(path), MotoricMap)
     assert [p.name for p in tmp_path.iterdir()] == ["l.npz"]  # no temporary left behind
 
 
@@ -63,7 +63,7 @@ def test_bench_learner_smoke(capsys):
 
 @pytest.mark.parametrize("kind", ["somq", "motoric"])
 def test_act_twice_without_learn_is_refused(kind):
-    learner = learners.make_learner(kind, None, n_trials=2, **BOX)
+    learner = learners.make(kind, None, n_trials=2, **BOX)
     learner.act(np.full((2, 2), 0.3))
     with pytest.raises(ValueError, match=r"act\(\) was called again before learn\(\)"):
         learner.act(np.full((2, 2), 0.3))
@@ -73,7 +73,7 @@ def test_act_twice_without_learn_is_refused(kind):
 
 @pytest.mark.parametrize("kind", ["somq", "motoric"])
 def test_complex_numbers_are_refused_not_truncated(kind):
-    learner = learners.make_learner(kind, None, n_trials=1, **BOX)
+    learner = learners.make(kind, None, n_trials=1, **BOX)
     with pytest.raises(ValueError, match="observations must be real numbers, got complex"):
         learner.act(np.array([[0.3 + 1j, 0.3]]))
     learner.act(np.array([[0.3, 0.3]]))
@@ -97,19 +97,19 @@ def test_memory_is_estimated_before_allocating(monkeypatch):
     config = SOMQConfig(input_shape=(100, 100), action_shape=(10,))
     with pytest.raises(ValueError, match=r"input_shape=100x100, action_shape=10 and 1 trial\(s\) needs about "
                                          r"2\.2 GiB of memory, more than the 1\.0 GiB available"):
-        learners.make_learner("somq", config, **BOX)
-    learners.make_learner("somq", SOMQConfig(input_shape=(30, 30), action_shape=(10,)), **BOX)  # 19 MiB
+        learners.make("somq", config, **BOX)
+    learners.make("somq", SOMQConfig(input_shape=(30, 30), action_shape=(10,)), **BOX)  # 19 MiB
 
 
 @pytest.mark.parametrize("relative", [False, True])
 def test_an_epsilon_that_overflows_is_refused(relative):
     config = SOMQConfig(epsilon=1e308, epsilon_relative=relative)
     with pytest.raises(ValueError, match="epsilon=1e\\+308 is too large"):
-        learners.make_learner("somq", config, **BOX)
-    learners.make_learner("somq", SOMQConfig(epsilon=1e6, epsilon_relative=relative), **BOX)  # large but finite
+        learners.make("somq", config, **BOX)
+    learners.make("somq", SOMQConfig(epsilon=1e6, epsilon_relative=relative), **BOX)  # large but finite
 
 
-@pytest.mark.parametrize("kind", learners.KINDS)
+@pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_every_kind_is_layered_and_has_presets(kind):
     from somarm.learners import presets
     from somarm.learners.base import ConfigBase, LearnerBase
@@ -117,8 +117,38 @@ def test_every_kind_is_layered_and_has_presets(kind):
 
     config_class, learner_class = learners.LEARNERS[kind]
     assert issubclass(config_class, ConfigBase)
-    # The map learners share LearnerBase (the input map); the tabular learner has fixed grids instead.
-    assert issubclass(learner_class, LearnerBase) or kind == "tabular"
+    assert issubclass(learner_class, LearnerBase)
     assert isinstance(learners.make(kind, None, **BOX), Learner)
     assert learner_class.kind == kind and learner_class.config_class is config_class
     assert isinstance(presets.config_for(kind, "table2"), config_class)
+
+
+@pytest.mark.parametrize("kind", learners.LEARNERS)
+def test_every_kind_estimates_its_memory_in_one_place_the_registry_reaches(kind, monkeypatch):
+    from somarm import validation
+
+    config = learners.config_class(kind)()
+    what, n_bytes = learners.memory_needed(kind, config, n_trials=3, obs_dim=2, action_dim=1)
+    assert what.startswith(f"a {kind} learner with ") and what.endswith("and 3 trial(s)") and n_bytes > 0
+    learner = learners.make(kind, config, n_trials=3, **BOX)
+    # What it allocates is covered: the arrays the learner holds fit inside the estimate, but for
+    # a few numbers per trial and dimension (bounds, winners, chosen cells) that no estimate counts.
+    held = sum(value.nbytes for value in vars(learner).values() if isinstance(value, np.ndarray))
+    assert held <= n_bytes + 64 * (3 + 2 + 1)
+    monkeypatch.setattr(validation, "_available_memory", lambda: int(n_bytes) - 1)
+    with pytest.raises(ValueError, match=rf"^a {kind} learner with .* needs about .* of memory, more than"):
+        learners.make(kind, config, n_trials=3, **BOX)
+
+
+def test_an_unknown_kind_has_no_memory_estimate():
+    with pytest.raises(ValueError, match="unknown learner kind 'dqn'; allowed: somq, motoric, tabular"):
+        learners.memory_needed("dqn", None, n_trials=1, obs_dim=1, action_dim=1)
+
+
+@pytest.mark.parametrize("kind", learners.LEARNERS)
+def test_what_a_learner_says_it_has_is_what_it_has(kind):
+    learner = learners.make(kind, None, n_trials=2, **BOX)
+    assert learner.has_maps == hasattr(learner, "input_weights") == hasattr(learner, "action_weights")
+    assert learner.has_action_map == (learner.has_maps and hasattr(learner, "q"))
+    assert learner.learned_arrays and all(isinstance(getattr(learner, n), np.ndarray) for n in learner.learned_arrays)
+    assert learner.periodic_dimensions.shape == (1,) and not learner.periodic_dimensions.any()

@@ -97,11 +97,11 @@ def test_unknown_names_list_the_allowed():
 
 
 def test_presets_build_learners():
-    from somarm.learners import make_learner
+    from somarm import learners
 
     for name in NAMES:
         for kind in ("somq", "motoric"):
-            learner = make_learner(kind, presets.config_for(kind, name), observation_low=[0, 0],
+            learner = learners.make(kind, presets.config_for(kind, name), observation_low=[0, 0],
                                    observation_high=[1, 1], action_low=[0, 0], action_high=[1, 1], n_trials=2)
             actions = learner.act(np.full((2, 2), 0.5))
             learner.learn(-actions.sum(axis=1))

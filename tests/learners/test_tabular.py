@@ -3,15 +3,14 @@
 import numpy as np
 import pytest
 
-from somarm import tasks
-from somarm.learners import load_learner, make_learner
+from somarm import learners, tasks
 from somarm.learners.tabular import TabularConfig, TabularQ
 
 BOX = dict(observation_low=[0.0], observation_high=[1.0], action_low=[0.0], action_high=[1.0])
 
 
 def _tiny(config=None, **kwargs):
-    return make_learner("tabular", config or TabularConfig(observation_bins=4, action_bins=8), **BOX, **kwargs)
+    return learners.make("tabular", config or TabularConfig(observation_bins=4, action_bins=8), **BOX, **kwargs)
 
 
 def test_cells_and_action_grid_are_the_stated_ones():
@@ -72,8 +71,8 @@ def test_trial_i_is_the_same_alone_or_in_a_batch():
     alone_task = tasks.make("reach2", seed=2, trial_ids=[2])
     kwargs = dict(observation_low=task.observation_low, observation_high=task.observation_high,
                   action_low=task.action_low, action_high=task.action_high, seed=2)
-    batch = make_learner("tabular", n_trials=3, **kwargs)
-    alone = make_learner("tabular", n_trials=1, trial_ids=[2], **kwargs)
+    batch = learners.make("tabular", n_trials=3, **kwargs)
+    alone = learners.make("tabular", n_trials=1, trial_ids=[2], **kwargs)
     for _ in range(500):
         batch.learn(task.step(batch.act(task.reset())))
         alone.learn(alone_task.step(alone.act(alone_task.reset())))
@@ -87,7 +86,7 @@ def test_save_and_load_continue_exactly(tmp_path):
         learner.learn(-rng.random(2) - learner.act(rng.random((2, 1)))[:, 0])
     learner.act(np.array([[0.2], [0.9]]))  # saved between act and learn
     learner.save(tmp_path / "tab.npz")
-    copy = load_learner(tmp_path / "tab.npz")
+    copy = learners.load(tmp_path / "tab.npz")
     assert isinstance(copy, TabularQ) and copy.config == learner.config
     for one in (learner, copy):
         one.learn(np.array([-0.5, -0.1]))
@@ -99,7 +98,7 @@ def test_save_and_load_continue_exactly(tmp_path):
 def test_an_action_grid_too_large_is_a_clear_error():
     task = tasks.make("reach20", backend="analytic")
     with pytest.raises(ValueError, match=r"20 dimensions .* table entries; at most 1e\+07"):
-        make_learner("tabular", observation_low=task.observation_low, observation_high=task.observation_high,
+        learners.make("tabular", observation_low=task.observation_low, observation_high=task.observation_high,
                      action_low=task.action_low, action_high=task.action_high)
 
 

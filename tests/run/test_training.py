@@ -3,7 +3,7 @@ import json
 import numpy as np
 import pytest
 
-from somarm import run
+from somarm import learners, run
 from somarm.run import RunConfig
 
 
@@ -147,6 +147,18 @@ def test_run_folder_round_trip_and_figures(tmp_path):
     assert int(curves["seed"]) == 3
     config, learner = run.load(tmp_path)
     np.testing.assert_array_equal(learner.q, result.learner.q)
+
+
+@pytest.mark.parametrize("kind", learners.LEARNERS)
+def test_every_learner_kind_passes_the_memory_check_trains_and_reloads(tmp_path, kind):
+    config = RunConfig(task="reach2", learner=kind, n_trials=2, n_steps=200, block=50, seed=1).resolved()
+    run.check_memory_needs([config])  # each kind's own estimate, through the registry
+    result = run.train(config, progress=False)
+    run.write(result, tmp_path)
+    _, learner = run.load(tmp_path)
+    for name in learner.learned_arrays:
+        np.testing.assert_array_equal(getattr(learner, name), getattr(result.learner, name))
+    assert ((tmp_path / "input_map.png").exists()) == learner.has_maps
 
 
 @pytest.mark.parametrize(

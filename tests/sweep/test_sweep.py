@@ -7,7 +7,7 @@ import signal
 import numpy as np
 import pytest
 
-from somarm import cli, run
+from somarm import cli, learners, run
 from somarm.run import group
 from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
 from somarm.sweep.spec import preset_value
@@ -82,6 +82,15 @@ def test_points_sharing_a_task_and_seed_train_in_one_group_cut_only_for_memory()
         assert len({(c.seed, c.task_params["radius"]) for _, _, c in chunk.items}) == 1
         assert sorted(c.overrides["alpha"] for _, _, c in chunk.items) == [0.5, 1.0]
     assert len(plan_chunks(items, max_bytes=1.0)) == 8  # too big for one group: one point each
+
+
+@pytest.mark.parametrize("kind", learners.LEARNERS)
+def test_chunks_are_cut_by_each_learner_kinds_own_memory_estimate(kind):
+    from somarm.run import RunConfig
+
+    config = RunConfig(task="reach2", learner=kind).resolved()
+    items = [(0, 0, config), (1, 0, config)]
+    assert len(plan_chunks(items)) == 1 and len(plan_chunks(items, max_bytes=1.0)) == 2
 
 
 def test_a_local_sweep_equals_separate_runs_bit_for_bit(tmp_path, capsys):

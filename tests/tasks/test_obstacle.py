@@ -10,7 +10,7 @@ import pytest
 
 from somarm import run as runs
 from somarm import tasks
-from somarm.protocols import BatchedTask
+from somarm.protocols import BatchedTask, EpisodicTask
 from somarm.tasks import assets, obstacle, obstacle_search
 
 
@@ -28,7 +28,7 @@ def _random_actions(task, rng):
 
 def test_the_batched_task_conforms_and_its_episodes_end_at_different_steps():
     task = tasks.make("reach2_obstacle", n_trials=6, seed=3, step_limit=5)
-    assert isinstance(task, BatchedTask) and task.episodic
+    assert isinstance(task, BatchedTask) and isinstance(task, EpisodicTask) and task.episodic and task.actuated
     rng = np.random.default_rng(0)
     lengths, steps = [], np.zeros(6, dtype=int)
     for _ in range(12):

@@ -21,7 +21,7 @@ def test_registry_lists_the_tasks_of_the_paper():
     assert NAMES == ["reach2", "reach20", "four_goals", "throw", "throw_distance", "throw_wind",
                      "throw_friction", "throw_mass"]
     for name in tasks.names():
-        line = tasks.describe(name)
+        line = tasks.record(name).summary
         assert line and "\n" not in line
 
 
@@ -174,7 +174,7 @@ def test_unknown_task_lists_the_names():
     with pytest.raises(ValueError, match="tasks: reach2"):
         tasks.load("nope")
     with pytest.raises(ValueError, match="tasks: reach2"):
-        tasks.describe("nope")
+        tasks.record("nope")
 
 
 @pytest.mark.parametrize("name, params, match", [
@@ -259,6 +259,11 @@ def test_every_task_record_agrees_with_its_task(name):
     assert len(record.observation_labels) == task.observation_dim
     assert len(record.action_labels) == 2 and record.view in ("goals", "sweep", "fan")
     assert set(record.settable) <= set(record.fields())
+    # The task declares what the record says, and every member of its protocol.
+    from somarm.protocols import BatchedTask, EpisodicTask
+
+    assert task.episodic == record.episodic and isinstance(task, BatchedTask)
+    assert isinstance(task, EpisodicTask) == task.episodic
 
 
 @pytest.mark.parametrize("name", tasks.names())
