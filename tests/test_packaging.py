@@ -54,3 +54,13 @@ def test_the_library_on_a_headless_machine_prints_no_glfw_warning():
     done = subprocess.run([sys.executable, "-c", "import os, somarm; print(os.environ['MUJOCO_GL'])"], env=env,
                           capture_output=True, text=True, timeout=60)
     assert done.stdout.strip() == "egl"
+
+
+def test_the_default_output_folders_are_ignored_by_git(tmp_path):
+    import shutil
+    import subprocess
+
+    assert shutil.which("git"), "git is needed to check .gitignore"
+    for folder in ("runs/reach2__somq__seed0", "compare/reach2", "sweeps/reach2", "reproduce", "reproduce-quick"):
+        done = subprocess.run(["git", "check-ignore", "-q", f"{folder}/x.json"], cwd=ROOT)
+        assert done.returncode == 0, f"{folder} is not ignored by .gitignore"

@@ -21,6 +21,8 @@ def add_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seeds", type=whole_number, default=1, metavar="K",
                         help="seeds --seed .. --seed+K-1, each an independent set of trials (default 1)")
     parser.add_argument("--out", metavar="DIR", help="sweep folder (default sweeps/TASK); a rerun finishes what is missing")
+    parser.add_argument("--force", action="store_true",
+                        help="replace what --out holds when it is not this sweep (the same sweep goes on where it stopped)")
     parser.add_argument("--engine", default="local", metavar="NAME", help="local (default: lockstep here) or ray (Ray Tune)")
     parser.add_argument("--address", metavar="ADDR", help="Ray cluster to join (--engine ray; default: start a local one)")
     parser.add_argument("--workers", type=whole_number, metavar="W", help="processes (local, default 1) or trials at once (ray)")
@@ -50,7 +52,7 @@ def main(args: argparse.Namespace) -> int:
     sigterm_as_interrupt()
     outcome = run_sweep(spec, out, engine=args.engine, workers=args.workers, address=args.address,
                         max_group_bytes=args.max_group_mb * 1e6, progress=not args.no_progress,
-                        figure=not args.no_figures)
+                        figure=not args.no_figures, force=args.force)
     print(outcome.summary)
     if outcome.interrupted:
         print(f"interrupted: partial results in {out}; rerun the same command to finish", file=sys.stderr)
