@@ -58,7 +58,7 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
         (["train", "reach2", "--set", "noequals"], "KEY=VALUE"),
         (["train", "reach2", "--trials", "0"], "trials"),
         (["train", "reach2", "--out", "/proc/somarm-cannot-write"], "not writable"),
-        (["evaluate", "/nonexistent-run"], "not a run folder"),
+        (["evaluate", "/nonexistent-run"], "/nonexistent-run does not exist; give a run folder"),
         (["reproduce", "--only", "fig99"], "unknown experiment"),
         (["train", "reach2", "--set", "lambda_a=3"], "learning rate"),
         (["train", "reach2", "--trial-ids", "3", "3"], "differ"),
