@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from somarm.console import guard_standard_streams
-from somarm.validation import OneLineParser, check_int
+from somarm.validation import OneLineParser, check_int, check_memory, whole_number
 
 __all__ = ["main"]
 
@@ -39,9 +39,17 @@ def _cmd_tasks(args) -> int:
 
 def _cmd_presets(args) -> int:
     from somarm.learners import presets
+    from somarm.learners.settings import format_settings, settings_of
 
-    for name in presets.PRESETS:
-        print(f"{name:10s} {presets.describe(name)}")
+    if args.name is None:
+        for name in presets.PRESETS:
+            print(f"{name:10s} {presets.describe(name)}")
+        return 0
+    if args.name not in presets.PRESETS:
+        raise ValueError(f"unknown preset {args.name!r}; allowed: {', '.join(presets.PRESETS)}")
+    print(f"# {args.name}: {presets.describe(args.name)}")
+    for key, text in format_settings(settings_of(presets.get(args.name))).items():
+        print(f"--set {key}={text}")
     return 0
 
 
@@ -49,8 +57,11 @@ def _cmd_train(args) -> int:
     from somarm import run
     from somarm.run.claim import claim
 
+    if not args.view and (args.host is not None or args.port is not None):
+        raise ValueError("--host and --port are the viewer's: give --view with them, or leave them out")
     if args.port is not None and not 0 <= args.port <= 65535:
         raise ValueError(f"--port must be in 0..65535, got {args.port}")
+    args.host = "127.0.0.1" if args.host is None else args.host
     config = run.from_options(args)
     group = run.RunGroup([config])  # built once: a bad preset, --set or --task-set fails before any output
     out = _out_folder(args.out, f"runs/{config.task}__{config.learner}__seed{config.seed}")
@@ -130,13 +141,17 @@ def _cmd_evaluate(args) -> int:
     from somarm.run import evaluation
 
     check_int("--observations", args.observations)
-    check_int("--seed", args.seed, minimum=0)
     config, learner = run.load(args.run)
+    seed = config.seed if args.seed is None else args.seed  # the run's own: the number summary.json has
+    # Observations, actions and rewards of every trial, in float64, about twice over while they are made.
+    width = learner.observation_low.size + learner.action_low.size + 2
+    check_memory(f"--observations {args.observations} for {learner.n_trials} trial(s)",
+                 16.0 * args.observations * learner.n_trials * width, "give fewer --observations")
     task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
-    rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=args.seed)
+    rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=seed)
     print(
         f"{config.task}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "
-        f"{learner.n_trials} trial(s), {args.observations} fresh observations, seed {args.seed})"
+        f"{learner.n_trials} trial(s), {args.observations} fresh observations, seed {seed})"
     )
     return 0
 
@@ -148,7 +163,7 @@ def _cmd_reproduce(args) -> int:
     from somarm.validation import check_int
 
     runner.check_names(args.only)
-    check_int("seeds", args.seeds)
+    check_int("--seeds", args.seeds)
     check_int("--jobs", args.jobs)
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
@@ -157,7 +172,7 @@ def _cmd_reproduce(args) -> int:
     sigterm_as_interrupt()
     try:
         status = runner.reproduce(owner.path, quick=args.quick, only=args.only, progress=not args.no_progress,
-                                  seeds=args.seeds, backend=args.backend, jobs=args.jobs)
+                                  seeds=args.seeds, seed=args.seed, backend=args.backend, jobs=args.jobs)
         owner.commit()  # a finished report, or the part an interrupted run wrote
         return status
     except ValueError:  # a file could not be written: the report says which experiments it keeps
@@ -183,6 +198,7 @@ def _cmd_compare(args) -> int:
         samples=args.samples,
         peer_samples=args.peer_samples,
         seeds=args.seeds,
+        seed=args.seed,
         observations=args.observations,
         task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
     )
@@ -219,7 +235,9 @@ def _parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     sub.add_parser("tasks", help="list the registered tasks").set_defaults(func=_cmd_tasks)
-    sub.add_parser("presets", help="list the paper's parameter tables").set_defaults(func=_cmd_presets)
+    presets_cmd = sub.add_parser("presets", help="the paper's parameter tables; with a NAME, its settings")
+    presets_cmd.add_argument("name", nargs="?", help="a preset: print its settings as --set KEY=VALUE lines")
+    presets_cmd.set_defaults(func=_cmd_presets)
 
     train = sub.add_parser("train", help="train headless and write a run folder")
     run.add_options(train)  # every run setting, its default and help, from RunConfig
@@ -228,14 +246,15 @@ def _parser() -> argparse.ArgumentParser:
     train.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.add_argument("--view", action="store_true", help="stream to a meshcat browser viewer")
-    train.add_argument("--host", default="127.0.0.1", help="viewer host (default 127.0.0.1)")
-    train.add_argument("--port", type=int, help="viewer web port (default: a free one)")
+    train.add_argument("--host", help="viewer host, with --view (default 127.0.0.1)")
+    train.add_argument("--port", type=whole_number, help="viewer web port, with --view (default: a free one)")
     train.set_defaults(func=_cmd_train)
 
     evaluate = sub.add_parser("evaluate", help="greedy mean reward of a trained run")
     evaluate.add_argument("run", help="run folder written by `somarm train`")
-    evaluate.add_argument("--observations", type=int, default=1000, help="fresh observations (1000)")
-    evaluate.add_argument("--seed", type=int, default=0, help="seed of the fresh observations")
+    evaluate.add_argument("--observations", type=whole_number, default=1000, help="fresh observations (1000)")
+    evaluate.add_argument("--seed", type=whole_number,
+                          help="seed of the fresh observations (default: the run's seed, as summary.json)")
     evaluate.set_defaults(func=_cmd_evaluate)
 
     reproduce = sub.add_parser("reproduce", help="run every experiment of the paper and write REPORT.md")
@@ -244,11 +263,13 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--force", action="store_true", help="replace the report already in --out")
     reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
-    reproduce.add_argument("--seeds", type=int, default=1, metavar="N",
+    reproduce.add_argument("--seeds", type=whole_number, default=1, metavar="N",
                            help="run every experiment at N seeds; verdicts say in how many they hold (1)")
+    reproduce.add_argument("--seed", type=whole_number, default=0, metavar="S",
+                           help="the first seed: the seeds are S .. S+N-1 (default 0)")
     reproduce.add_argument("--backend", default="mujoco", choices=("mujoco", "analytic"),
                            help="where rewards are computed: mujoco (default) or analytic (closed forms, quick)")
-    reproduce.add_argument("--jobs", type=int, default=1, metavar="N",
+    reproduce.add_argument("--jobs", type=whole_number, default=1, metavar="N",
                            help="experiments run at once, each in its own process (1: one after another, "
                                 "with progress bars)")
     reproduce.set_defaults(func=_cmd_reproduce)
@@ -257,10 +278,11 @@ def _parser() -> argparse.ArgumentParser:
     comp.add_argument("task", help="task name (see `somarm tasks`)")
     comp.add_argument("--learners", default="somq,motoric,tabular,td3,sac",
                       help="comma-separated, from somq, motoric, tabular, td3, sac (default: all five)")
-    comp.add_argument("--samples", type=int, default=10_000, help="training samples (default 10000)")
-    comp.add_argument("--peer-samples", type=int, help="training samples of td3 and sac (default --samples)")
-    comp.add_argument("--seeds", type=int, default=3, help="seeds 0..K-1 for every learner (default 3)")
-    comp.add_argument("--observations", type=int, default=1000, help="fresh observations scored (1000)")
+    comp.add_argument("--samples", type=whole_number, default=10_000, help="training samples (default 10000)")
+    comp.add_argument("--peer-samples", type=whole_number, help="training samples of td3 and sac (default --samples)")
+    comp.add_argument("--seeds", type=whole_number, default=3, help="seeds S..S+K-1 for every learner (default 3)")
+    comp.add_argument("--seed", type=whole_number, default=0, help="the first seed S (default 0)")
+    comp.add_argument("--observations", type=whole_number, default=1000, help="fresh observations scored (1000)")
     comp.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
     comp.add_argument("--out", help="output folder (default compare/TASK)")
     comp.add_argument("--force", action="store_true", help="replace an earlier comparison in --out")
@@ -272,7 +294,7 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
 
     sweep = sub.add_parser("sweep", help="search learner settings and task parameters over seeds")
-    run.add_options(sweep)  # the run every point starts from; --seed is the first seed
+    run.add_options(sweep, leave_out=("trial_ids",))  # the run every point starts from; --seed is the first seed
     sweep_cli.add_options(sweep)
     sweep.set_defaults(func=_cmd_sweep)
     return parser

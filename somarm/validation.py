@@ -5,11 +5,16 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 
 import numpy as np
 
 __all__ = [
     "OneLineParser",
+    "parse_int",
+    "parse_float",
+    "whole_number",
+    "number",
     "check_int",
     "check_int_list",
     "check_number",
@@ -35,10 +40,46 @@ class OneLineParser(argparse.ArgumentParser):
         raise ValueError(message)
 
 
+#: Numbers as a user writes them: ASCII digits, no digit-group underscores (Python's int() and float()
+#: also take ``1_000`` and other scripts' digits, which a typo or a pasted text can bring in).
+_INT = re.compile(r"[+-]?[0-9]+")
+_FLOAT = re.compile(r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)", re.IGNORECASE)
+
+
+def parse_int(name: str, text: str) -> int:
+    """``text`` as a whole number written with ASCII digits (``"12"``, ``"-3"``); ValueError naming ``name``."""
+    if not isinstance(text, str) or not _INT.fullmatch(text.strip()):
+        raise ValueError(f"{name} must be a whole number written with the digits 0-9, got {text!r}")
+    return int(text)
+
+
+def parse_float(name: str, text: str) -> float:
+    """``text`` as a number written with ASCII digits (``"0.5"``, ``"1e-3"``); ValueError naming ``name``."""
+    if not isinstance(text, str) or not _FLOAT.fullmatch(text.strip()):
+        raise ValueError(f"{name} must be a number written with the digits 0-9 (such as 0.5 or 1e-3), got {text!r}")
+    return float(text)
+
+
+def whole_number(text: str) -> int:
+    """argparse ``type`` of a whole-number option (argparse puts the option's name before the message)."""
+    try:
+        return parse_int("it", text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def number(text: str) -> float:
+    """argparse ``type`` of a number option."""
+    try:
+        return parse_float("it", text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def check_int_list(name: str, text: str, *, minimum: int = 1) -> list[int]:
     """``"1,20,100" -> [1, 20, 100]``, each >= ``minimum``; ValueError naming ``name`` otherwise."""
     try:
-        values = [int(part) for part in str(text).split(",")]
+        values = [parse_int(name, part) for part in str(text).split(",")]
     except ValueError:
         raise ValueError(f"{name} takes comma-separated whole numbers, got {text!r}") from None
     return [check_int(name, value, minimum=minimum) for value in values]

@@ -58,7 +58,7 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
         (["train", "reach2", "--set", "noequals"], "KEY=VALUE"),
         (["train", "reach2", "--trials", "0"], "trials"),
         (["train", "reach2", "--out", "/proc/somarm-cannot-write"], "not writable"),
-        (["evaluate", "/nonexistent-run"], "not a run folder"),
+        (["evaluate", "/nonexistent-run"], "/nonexistent-run does not exist; give a run folder"),
         (["reproduce", "--only", "fig99"], "unknown experiment"),
         (["train", "reach2", "--set", "lambda_a=3"], "learning rate"),
         (["train", "reach2", "--trial-ids", "3", "3"], "differ"),
@@ -171,7 +171,7 @@ def test_a_run_stopped_before_one_block_writes_valid_json(tmp_path):
 
 @pytest.mark.parametrize("argv, flag", [
     (["train", "reach2", "--step", "10"], "--step"),
-    (["reproduce", "--quick", "--seed", "3"], "--seed"),
+    (["compare", "reach2", "--sample", "10"], "--sample"),
     (["sweep", "reach2", "--grid", "alpha=0.5", "--step", "10"], "--step"),
     (["bench", "learner", "--trial", "3"], "--trial"),
 ])
@@ -179,3 +179,71 @@ def test_an_abbreviated_option_is_refused_not_expanded(argv, flag, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unrecognized arguments" in err[0] and flag in err[0], err
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["train", "reach2", "--steps", "1_000"], "argument --steps: it must be a whole number written with the digits 0-9"),
+    (["train", "reach2", "--steps", "\uff11\uff10"], "argument --steps: it must be a whole number"),
+    (["train", "reach2", "--set", "alpha=0_1"], "alpha must be a number written with the digits 0-9"),
+    (["train", "reach2", "--set", "input_shape=\uff15x5"], "input_shape must look like 50 or 10x10"),
+    (["train", "reach2", "--set", "decay=inv:1_000"], "bad decay 'inv:1_000'"),
+    (["train", "reach2", "--set", "alpha=0.5", "--set", "alpha=0.7"], "--set alpha is given twice (0.5 and 0.7)"),
+    (["train", "reach2", "--task-set", "radius=0.2", "--task-set", "radius=0.3"], "--task-set radius is given twice"),
+    (["train", "reach2", "--port", "8000"], "--host and --port are the viewer's: give --view"),
+    (["train", "reach2", "--host", "0.0.0.0"], "--host and --port are the viewer's: give --view"),
+    (["view", "reach2", "--trial", "3", "--html", "x.html"], "--trial picks a trial of a trained run: give --run"),
+    (["presets", "table9"], "unknown preset 'table9'; allowed: table1,"),
+    (["sweep", "reach2", "--grid", "alpha=0.5,1", "--trial-ids", "3"], "unrecognized arguments: --trial-ids"),
+])
+def test_numbers_keys_and_options_that_cannot_mean_what_was_typed_are_one_line(argv, needle, capsys, tmp_path,
+                                                                               monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("somarm: error: ") and needle in err[0], err
+    assert not (tmp_path / "runs").exists()
+
+
+def test_sweep_help_lists_no_option_it_refuses(capsys):
+    with pytest.raises(SystemExit):
+        main(["sweep", "--help"])
+    assert "--trial-ids" not in capsys.readouterr().out
+
+
+def test_presets_name_prints_settings_that_rebuild_the_preset(capsys):
+    from somarm.learners import presets
+    from somarm.learners.somq import SOMQConfig
+
+    assert main(["presets", "table2"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("# table2: Table 2")
+    texts = dict(line.removeprefix("--set ").split("=", 1) for line in lines[1:])
+    assert SOMQConfig().with_overrides(texts) == presets.get("table2")
+
+
+def test_evaluate_scores_with_the_runs_seed_unless_told(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["train", "reach2", "--steps", "300", "--trials", "2", "--seed", "5", "--no-progress",
+                 "--no-figures", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    capsys.readouterr()
+    assert main(["evaluate", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert f"greedy mean reward {summary['greedy_mean_reward']:+.4f}" in said and "seed 5)" in said
+    assert main(["evaluate", str(out), "--seed", "0"]) == 0
+    assert "seed 0)" in capsys.readouterr().out
+    assert main(["evaluate", str(out), "--observations", "10000000000"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--observations 10000000000 for 2 trial(s) needs about" in err[0], err
+
+
+def test_reproduce_and_compare_take_a_first_seed(tmp_path):
+    from somarm.reproduce import runner
+
+    assert main(["reproduce", "--quick", "--only", "reach20", "--seed", "3", "--no-progress",
+                 "--out", str(tmp_path / "r")]) == 0
+    claims = runner.load_claims(tmp_path / "r")
+    assert claims["seed"] == 3 and claims["seeds"] == [3]
+    assert main(["compare", "reach2", "--learners", "somq", "--samples", "100", "--seeds", "2", "--seed", "4",
+                 "--observations", "50", "--no-progress", "--out", str(tmp_path / "c")]) == 0
+    assert json.loads((tmp_path / "c" / "compare.json").read_text())["seeds"] == [4, 5]

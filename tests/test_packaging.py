@@ -68,3 +68,13 @@ def test_the_version_is_written_once_and_packaging_reads_it_from_the_package():
     expanded = pyprojecttoml.read_configuration(ROOT / "pyproject.toml", expand=True)
     assert expanded["project"]["version"] == somarm.__version__
     assert re.fullmatch(r"\d+\.\d+\.\d+", somarm.__version__)
+
+
+def test_the_default_output_folders_are_ignored_by_git(tmp_path):
+    import shutil
+    import subprocess
+
+    assert shutil.which("git"), "git is needed to check .gitignore"
+    for folder in ("runs/reach2__somq__seed0", "compare/reach2", "sweeps/reach2", "reproduce", "reproduce-quick"):
+        done = subprocess.run(["git", "check-ignore", "-q", f"{folder}/x.json"], cwd=ROOT)
+        assert done.returncode == 0, f"{folder} is not ignored by .gitignore"

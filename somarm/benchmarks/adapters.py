@@ -17,6 +17,7 @@ import argparse
 import numpy as np
 
 from somarm.benchmarks import best_seconds
+from somarm.validation import whole_number
 
 __all__ = ["measure", "main"]
 
@@ -78,9 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="somarm bench adapters", description=__doc__.splitlines()[0],
                                      allow_abbrev=False)
     parser.add_argument("--task", default="reach2", help="task (default reach2)")
-    parser.add_argument("--envs", type=int, default=100, help="envs (trials) stepped together (default 100)")
-    parser.add_argument("--steps", type=int, help="steps per timing (default 300, quick 30)")
-    parser.add_argument("--repeats", type=int, help="best of this many runs (default 3, quick 1)")
+    parser.add_argument("--envs", type=whole_number, default=100, help="envs (trials) stepped together (default 100)")
+    parser.add_argument("--steps", type=whole_number, help="steps per timing (default 300, quick 30)")
+    parser.add_argument("--repeats", type=whole_number, help="best of this many runs (default 3, quick 1)")
     parser.add_argument("--quick", action="store_true", help="fewer steps (a smoke run)")
     args = parser.parse_args(argv)
     steps = args.steps or (30 if args.quick else 300)

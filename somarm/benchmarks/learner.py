@@ -19,7 +19,7 @@ import numpy as np
 from somarm.learners.presets import get
 from somarm.learners.reference import ReferenceSOMQ
 from somarm.learners.somq import SOMQ, SOMQConfig
-from somarm.validation import OneLineParser, check_int, check_int_list
+from somarm.validation import OneLineParser, check_int, check_int_list, whole_number
 
 __all__ = ["Case", "CASES", "time_batched", "time_reference", "interpolated_rows", "main"]
 
@@ -111,9 +111,9 @@ def main(argv: list[str] | None = None) -> int:
     """Print the table; returns 0 (the targets are reported, not enforced)."""
     parser = OneLineParser(prog="somarm bench learner", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps (a smoke run)")
-    parser.add_argument("--steps", type=int, help="steps per timing (default 2000, quick 200)")
-    parser.add_argument("--t0", type=int, default=0, help="step the schedules start at (default 0)")
-    parser.add_argument("--repeats", type=int, help="best of this many runs (default 3, quick 1)")
+    parser.add_argument("--steps", type=whole_number, help="steps per timing (default 2000, quick 200)")
+    parser.add_argument("--t0", type=whole_number, default=0, help="step the schedules start at (default 0)")
+    parser.add_argument("--repeats", type=whole_number, help="best of this many runs (default 3, quick 1)")
     parser.add_argument("--trials", default="1,20,100", help="comma-separated n_trials (default 1,20,100)")
     args = parser.parse_args(argv)
     n_steps = check_int("--steps", args.steps if args.steps is not None else (200 if args.quick else 2000))

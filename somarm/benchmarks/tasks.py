@@ -22,7 +22,7 @@ from somarm import tasks
 from somarm.io import atomic_write_json
 from somarm.tasks import flight
 from somarm.tasks import throw as throw_module
-from somarm.validation import OneLineParser, check_int
+from somarm.validation import OneLineParser, check_int, whole_number
 
 __all__ = ["TARGETS", "measure", "main"]
 
@@ -107,10 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     """Print the table (and write ``--json``); returns 0 (a benchmark reports, it does not fail)."""
     parser = OneLineParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small batches, one repeat (a smoke run)")
-    parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure, best kept (3)")
+    parser.add_argument("--repeats", type=whole_number, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--only", nargs="+", metavar="TASK",
                         help="benchmark only these tasks ('driven': the actuated and obstacle rows)")
-    parser.add_argument("--threads", type=int, default=2, help="threads of the MuJoCo backend (2)")
+    parser.add_argument("--threads", type=whole_number, default=2, help="threads of the MuJoCo backend (2)")
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write every figure to FILE (JSON)")
     args = parser.parse_args(argv)
     check_int("--repeats", args.repeats)

@@ -19,7 +19,7 @@ import timeit
 
 import numpy as np
 
-from somarm.validation import OneLineParser, check_int, check_number
+from somarm.validation import OneLineParser, check_int, check_number, number, whole_number
 
 __all__ = ["main"]
 
@@ -45,10 +45,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; returns 0."""
     parser = OneLineParser(prog="somarm bench viewer", description=__doc__.split("\n")[0])
     parser.add_argument("--task", default="reach2")
-    parser.add_argument("--steps", type=int, default=20_000)
-    parser.add_argument("--trials", type=int, default=1)
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--rate", type=float, default=30.0, help="LiveView max_rate_hz")
+    parser.add_argument("--steps", type=whole_number, default=20_000)
+    parser.add_argument("--trials", type=whole_number, default=1)
+    parser.add_argument("--repeats", type=whole_number, default=3)
+    parser.add_argument("--rate", type=number, default=30.0, help="LiveView max_rate_hz")
     args = parser.parse_args(argv)
     for name in ("steps", "trials", "repeats"):
         check_int(f"--{name}", getattr(args, name))

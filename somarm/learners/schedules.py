@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.validation import check_number
+from somarm.validation import check_number, parse_float, parse_int
 
 __all__ = [
     "Constant",
@@ -111,9 +111,9 @@ def parse_decay(text: str) -> Decay:
         if kind == "const" and not number:
             return Constant()
         if kind == "inv":
-            return InverseDecay(float(number))
+            return InverseDecay(parse_float("decay", number))
         if kind == "exp":
-            return ExponentialDecay(float(number))
+            return ExponentialDecay(parse_float("decay", number))
     except ValueError as exc:
         raise ValueError(f"bad decay {text!r}: {exc}") from None
     raise ValueError(f"bad decay {text!r}; allowed: inv:TAU (1/(t/TAU+1)), exp:C (C^t), const")
@@ -193,7 +193,7 @@ def parse_shape(name: str, text: str) -> tuple[int, ...]:
     """A map shape from ``"50"``, ``"50x1"`` or ``"10x10"``; ValueError naming ``name`` otherwise."""
     parts = str(text).lower().replace(" ", "").split("x")
     try:
-        shape = tuple(int(part) for part in parts)
+        shape = tuple(parse_int(name, part) for part in parts)
     except ValueError:
         raise ValueError(f"{name} must look like 50 or 10x10, got {text!r}") from None
     if not 1 <= len(shape) <= 2 or min(shape) < 1:

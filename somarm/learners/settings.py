@@ -24,7 +24,7 @@ from somarm.learners.schedules import (
     parse_decay,
     parse_shape,
 )
-from somarm.validation import check_number
+from somarm.validation import check_number, parse_float, parse_int
 
 __all__ = ["allowed_keys", "parse_settings", "apply_settings", "format_settings", "format_setting"]
 
@@ -91,20 +91,20 @@ def _parse(kind: str, key: str, text: str) -> Any:
     if kind == "decay":
         return parse_decay(text)
     if kind in ("number", "floor"):
-        return check_number(name if kind == "number" else key, float(text), minimum=0.0)
+        return check_number(name if kind == "number" else key, parse_float(key, text), minimum=0.0)
     if kind == "shape":
         return parse_shape(name, text)
     if kind == "bool":
         return parse_bool(name, text)
     if kind == "range":
-        return None if text.lower() == "none" else tuple(float(v) for v in text.replace(",", ":").split(":"))
+        return None if text.lower() == "none" else tuple(parse_float(key, v) for v in text.replace(",", ":").split(":"))
     if kind == "float":
-        return float(text)
+        return parse_float(key, text)
     try:
         if kind == "optional_float":
-            return None if text.lower() == "none" else float(text)
+            return None if text.lower() == "none" else parse_float(key, text)
         if kind == "int":
-            return int(text)
+            return parse_int(key, text)
     except ValueError:
         raise ValueError(f"{key} must be {'a number or none' if kind == 'optional_float' else 'a whole number'}") \
             from None
@@ -214,6 +214,19 @@ def format_setting(value: Any) -> str:
     if isinstance(value, tuple):
         return "x".join(str(v) for v in value)
     return str(value)
+
+
+def settings_of(config: Any) -> dict[str, Any]:
+    """Every setting of ``config`` by key, typed: each schedule as ``NAME``, ``NAME.decay`` and
+    ``NAME.floor``, each other field by name. ``with_changes`` of them on any config gives ``config``."""
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(config):
+        value = getattr(config, f.name)
+        if f.name in type(config).SCHEDULES:
+            out.update({f.name: value.scale, f"{f.name}.decay": value.decay, f"{f.name}.floor": value.floor})
+        else:
+            out[f.name] = value
+    return out
 
 
 def format_settings(changes: dict[str, Any]) -> dict[str, str]:

@@ -47,7 +47,9 @@ class CompareConfig:
     peer_samples: int | None = None
     """Training samples for TD3 and SAC (None = ``samples``); they cost about 20 ms each."""
     seeds: int = 3
-    """Seeds 0 .. seeds-1, the same for every learner."""
+    """How many seeds: ``seed .. seed + seeds - 1``, the same for every learner."""
+    seed: int = 0
+    """The first seed."""
     observations: int = 1000
     """Fresh observations each greedy policy is scored on."""
     eval_seed: int = 0
@@ -103,9 +105,10 @@ def check(config: CompareConfig) -> list[str]:
     from somarm.validation import check_int
 
     for name in ("samples", "seeds", "observations"):
-        check_int(name, getattr(config, name))
+        check_int(f"--{name}", getattr(config, name))
     if config.peer_samples is not None:
-        check_int("peer_samples", config.peer_samples)
+        check_int("--peer-samples", config.peer_samples)
+    check_int("--seed", config.seed, minimum=0)
     check_int("eval_seed", config.eval_seed, minimum=0)
     unknown = [k for k in config.learners if k not in LEARNERS]
     if unknown or not config.learners:
@@ -214,7 +217,7 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[
     rng = np.random.default_rng(config.eval_seed)
     random_actions = rng.uniform(eval_task.action_low, eval_task.action_high, (len(observations), eval_task.action_dim))
     result: dict[str, Any] = {
-        "task": config.task, "task_params": config.task_params, "seeds": list(range(config.seeds)),
+        "task": config.task, "task_params": config.task_params, "seeds": list(range(config.seed, config.seed + config.seeds)),
         "observations": config.observations, "eval_seed": config.eval_seed,
         "random_action_error": float(-eval_task.evaluate(observations, random_actions).mean()),
         "somarm_version": __version__, "complete": False, "learners": {},
@@ -225,7 +228,7 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[
         rungs = ladder(samples)
         runner = _run_peer if kind in PEERS else _run_ours
         errors, walls, settings = [], [], {}
-        for seed in range(config.seeds):
+        for seed in range(config.seed, config.seed + config.seeds):
             e, w, settings = runner(kind, config, seed, rungs, observations, warm_up=seed == 0)
             errors.append(e)
             walls.append(w)

@@ -98,6 +98,7 @@ class FolderClaim:
     created: bool
     staged: bool = False
     _fd: int | None = None
+    _before: frozenset[str] = frozenset()  #: files already there when a run resumed in place
 
     @property
     def path(self) -> Path:
@@ -113,8 +114,12 @@ class FolderClaim:
           ValueError: the swap could not be done (the earlier run is then put back).
         """
         if not self.staged:
+            # What this run wrote, and what the folder's earlier runs wrote: not a user's file that was there.
+            now = _files_under(self.folder)
+            listed = set(_listed(self.folder))
+            ours = [f for f in now if f not in self._before or f in listed]
             try:
-                _write_manifest(self.folder / MANIFEST_NAME, _files_under(self.folder))
+                _write_manifest(self.folder / MANIFEST_NAME, ours)
             except OSError:  # a full disk: unlisted, these files are only ever replaced by name, never removed
                 (self.folder / (MANIFEST_NAME + ".tmp")).unlink(missing_ok=True)
             return
@@ -165,12 +170,15 @@ class FolderClaim:
                 pass
 
 
-def claim(folder: Path, *, force: bool = False, flag: str = "--out", what: str = "a run") -> FolderClaim:
+def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str = "--out",
+          what: str = "a run") -> FolderClaim:
     """Lock ``folder`` for this process; with ``force`` over earlier results, stage the new ones.
 
     Args:
       folder: the output folder (made, with its parents, if missing).
       force: replace earlier results (at ``commit``, and only the files somarm wrote there).
+      resume: the folder's results are this process's own to go on with (a sweep run again): write
+        in place, neither refused nor staged.
       flag: the option that named the folder, for messages.
       what: what the folder holds, for messages (``a run``, ``a report``).
 
@@ -202,6 +210,9 @@ def claim(folder: Path, *, force: bool = False, flag: str = "--out", what: str =
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         _recover(folder)
         existing = sorted(p.name for p in folder.iterdir() if p.name not in _OURS)
+        if existing and resume:
+            held._before = frozenset(_files_under(folder))
+            return held
         if existing and not force:
             shown = ", ".join(existing[:4]) + (", ..." if len(existing) > 4 else "")
             raise ValueError(f"{flag} {folder} is not empty ({shown}); give --force to replace {what} "

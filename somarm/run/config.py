@@ -23,7 +23,7 @@ import numpy as np
 
 from somarm.streams import trial_ids_for
 from somarm.tasks.record import BACKENDS
-from somarm.validation import check_int
+from somarm.validation import check_int, whole_number
 
 __all__ = ["RunConfig", "add_options", "from_options", "parse_assignments"]
 
@@ -62,23 +62,23 @@ class RunConfig:
         "--task-set", "change a task parameter, e.g. radius=0.2, punish_low=true", action="append",
         metavar="KEY=VALUE"))
     """Task parameters changed from their defaults, typed: ``{"radius": 0.2, "punish_low": True}``."""
-    n_trials: int = field(default=1, metadata=_option("--trials", "independent trials", type=int, metavar="N"))
+    n_trials: int = field(default=1, metadata=_option("--trials", "independent trials", type=whole_number, metavar="N"))
     """Independent trials advanced together (each has its own random streams)."""
     n_steps: int | None = field(default=None, metadata=_option(
-        "--steps", "training steps; default: the task's", type=int, metavar="N"))
+        "--steps", "training steps; default: the task's", type=whole_number, metavar="N"))
     """Training steps (one-step episodes); None takes the task's default."""
-    seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=int, metavar="S"))
+    seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=whole_number, metavar="S"))
     """The run's seed: every random number of the run derives from it."""
     backend: str = field(default="mujoco", metadata=_option(
         "--backend", f"where rewards are computed: {' or '.join(BACKENDS)} (a task's record says which it takes)",
         metavar="NAME"))
     """Where rewards are computed: ``mujoco`` (default) or ``analytic`` (``tasks.BACKENDS``; each task's
     record lists the ones it takes)."""
-    block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=int, metavar="N"))
+    block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=whole_number, metavar="N"))
     """Steps per recorded point of the learning curves (mean reward over the block)."""
     trial_ids: list[int] | None = field(default=None, metadata=_option(
         "--trial-ids", "run these trials only, e.g. 7 to replay trial 7 of a batch alone",
-        type=int, nargs="+", metavar="I"))
+        type=whole_number, nargs="+", metavar="I"))
     """Which trials to run (default ``0 .. n_trials-1``); ``[7]`` replays trial 7 of a batch alone."""
 
     def trial_ids_array(self) -> np.ndarray:
@@ -225,11 +225,12 @@ def _check_blocks(n_steps: int, block: int) -> None:
 
 
 # -- the command line, derived from RunConfig ---------------------------------------------------
-def add_options(parser: argparse.ArgumentParser) -> None:
-    """Add one option per ``RunConfig`` field (flag, help and default from the field)."""
+def add_options(parser: argparse.ArgumentParser, *, leave_out: tuple[str, ...] = ()) -> None:
+    """Add one option per ``RunConfig`` field (flag, help and default from the field), but the fields
+    named in ``leave_out`` (a sweep has no ``trial_ids``)."""
     for f in dataclasses.fields(RunConfig):
         option = f.metadata
-        if option["flag"] is None:
+        if option["flag"] is None or f.name in leave_out:
             continue
         kwargs = dict(option["argparse"])
         default = None if f.default is dataclasses.MISSING else f.default
@@ -240,7 +241,7 @@ def add_options(parser: argparse.ArgumentParser) -> None:
             parser.add_argument(option["flag"], help=text, **kwargs)
             continue
         if f.name == "n_trials":
-            text += " (default 1, or the number of --trial-ids)"
+            text += " (default 1" + (")" if "trial_ids" in leave_out else ", or the number of --trial-ids)")
             default = None  # so that --trial-ids alone sets the count
         parser.add_argument(option["flag"], dest=f.name, default=default, help=text, **kwargs)
 
@@ -252,6 +253,9 @@ def parse_assignments(items: list[str] | None, what: str) -> dict[str, str]:
         key, sep, value = item.partition("=")
         if not sep or not key.strip() or not value.strip():
             raise ValueError(f"{what} takes KEY=VALUE, got {item!r}")
+        if key.strip() in out:
+            raise ValueError(f"{what} {key.strip()} is given twice ({out[key.strip()]} and {value.strip()}); "
+                             "give each key once")
         out[key.strip()] = value.strip()
     return out
 
@@ -267,11 +271,12 @@ def from_options(args: argparse.Namespace) -> RunConfig:
     from somarm import tasks
     from somarm.learners.settings import parse_settings
 
-    values = {f.name: getattr(args, f.name) for f in dataclasses.fields(RunConfig) if f.metadata["flag"]}
+    values = {f.name: getattr(args, f.name) for f in dataclasses.fields(RunConfig)
+              if f.metadata["flag"] and hasattr(args, f.name)}
     tasks.record(args.task)  # an unknown task is named before its parameters
     values["overrides"] = parse_settings(_config_class(args.learner), parse_assignments(args.overrides, "--set"))
     values["task_params"] = tasks.parse_params(args.task, parse_assignments(args.task_params, "--task-set"))
-    trials, ids = args.n_trials, args.trial_ids
+    trials, ids = args.n_trials, getattr(args, "trial_ids", None)
     if ids and trials is not None and trials != len(ids):
         raise ValueError(f"--trials {trials} disagrees with {len(ids)} --trial-ids; give one of them")
     values["n_trials"] = len(ids) if ids else (1 if trials is None else trials)

@@ -74,6 +74,9 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     from somarm import learners
 
     out = Path(out_dir)
+    if not out.is_dir():
+        what = "is a file" if out.exists() else "does not exist"
+        raise ValueError(f"{out} {what}; give a run folder (one that `somarm train` wrote)")
     for name in ("config.json", "learner.npz"):
         if not (out / name).is_file():
             raise ValueError(f"{out} is not a run folder: {name} is missing")

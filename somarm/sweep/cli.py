@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from somarm.validation import number, whole_number
+
 __all__ = ["add_options", "main"]
 
 
@@ -14,15 +16,17 @@ def add_options(parser: argparse.ArgumentParser) -> None:
                         help="grid axis over a --set key or task.KEY (repeat for a product)")
     parser.add_argument("--random", action="append", default=[], metavar="KEY=LOW:HIGH[:log]",
                         help="random axis, drawn --samples times (whole numbers if LOW and HIGH are)")
-    parser.add_argument("--samples", type=int, default=0, metavar="N", help="random draws (each with every grid point)")
-    parser.add_argument("--sample-seed", type=int, default=0, metavar="S", help="seed of the random draws (default 0)")
-    parser.add_argument("--seeds", type=int, default=1, metavar="K",
+    parser.add_argument("--samples", type=whole_number, default=0, metavar="N", help="random draws (each with every grid point)")
+    parser.add_argument("--sample-seed", type=whole_number, default=0, metavar="S", help="seed of the random draws (default 0)")
+    parser.add_argument("--seeds", type=whole_number, default=1, metavar="K",
                         help="seeds --seed .. --seed+K-1, each an independent set of trials (default 1)")
     parser.add_argument("--out", metavar="DIR", help="sweep folder (default sweeps/TASK); a rerun finishes what is missing")
+    parser.add_argument("--force", action="store_true",
+                        help="replace what --out holds when it is not this sweep (the same sweep goes on where it stopped)")
     parser.add_argument("--engine", default="local", metavar="NAME", help="local (default: lockstep here) or ray (Ray Tune)")
     parser.add_argument("--address", metavar="ADDR", help="Ray cluster to join (--engine ray; default: start a local one)")
-    parser.add_argument("--workers", type=int, metavar="W", help="processes (local, default 1) or trials at once (ray)")
-    parser.add_argument("--max-group-mb", type=float, default=2000.0, metavar="MB",
+    parser.add_argument("--workers", type=whole_number, metavar="W", help="processes (local, default 1) or trials at once (ray)")
+    parser.add_argument("--max-group-mb", type=number, default=2000.0, metavar="MB",
                         help="learner memory of one lockstep group before it is cut (default 2000)")
     parser.add_argument("--no-figures", action="store_true", help="skip sweep.png")
     parser.add_argument("--no-progress", action="store_true", help="no progress output")
@@ -39,8 +43,6 @@ def main(args: argparse.Namespace) -> int:
     from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
     from somarm.validation import check_int
 
-    if args.trial_ids:
-        raise ValueError("--trial-ids does not apply to a sweep: give --trials N (trials 0 .. N-1)")
     if args.workers is not None:
         check_int("--workers", args.workers)
     axes = tuple(parse_grid(g) for g in args.grid) + tuple(parse_random(r) for r in args.random)
@@ -50,7 +52,7 @@ def main(args: argparse.Namespace) -> int:
     sigterm_as_interrupt()
     outcome = run_sweep(spec, out, engine=args.engine, workers=args.workers, address=args.address,
                         max_group_bytes=args.max_group_mb * 1e6, progress=not args.no_progress,
-                        figure=not args.no_figures)
+                        figure=not args.no_figures, force=args.force)
     print(outcome.summary)
     if outcome.interrupted:
         print(f"interrupted: partial results in {out}; rerun the same command to finish", file=sys.stderr)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib.util
+import json
 from pathlib import Path
 from typing import Literal
 
@@ -32,8 +34,14 @@ def run_sweep(
     max_group_bytes: float = 2e9,
     progress: bool = True,
     figure: bool = True,
+    force: bool = False,
 ) -> SweepOutcome:
     """Run every point of ``spec`` at every seed that ``out`` does not hold yet, then write the tables.
+
+    The folder is claimed as a run folder is (``somarm.run.claim``): one sweep writes it at a time,
+    the same sweep run again goes on where it stopped, and a folder holding anything else (another
+    sweep, a run, a report) is refused unless ``force``, which replaces it once the new sweep's
+    tables are written.
 
     Args:
       spec: the sweep (checked here).
@@ -44,27 +52,62 @@ def run_sweep(
       max_group_bytes: estimated learner memory of one lockstep group; bigger groups are cut.
       progress: progress bars (local) or Tune's status table (ray).
       figure: draw ``sweep.png``.
+      force: replace what ``out`` holds if it is not this sweep.
 
     Returns:
       A ``SweepOutcome``; ``interrupted`` when Ctrl-C or SIGTERM stopped it (the tables then hold
       the rows that finished, and rerunning the same sweep finishes the rest).
 
     Raises:
-      ValueError: a bad spec, point, engine or folder (one line), before anything runs.
+      ValueError: a bad spec, point, engine or folder (one line), before anything is written.
     """
+    from somarm.run.claim import claim
+
     if engine not in ENGINES:
         raise ValueError(f"unknown engine {engine!r}; allowed: {', '.join(ENGINES)}")
     if address and engine != "ray":
         raise ValueError("--address joins a Ray cluster: it needs --engine ray")
+    if engine == "ray" and importlib.util.find_spec("ray") is None:
+        raise ValueError('the ray engine needs Ray Tune: pip install -e ".[sweep]"')
     spec = spec.check()
     points = spec.points()
     validate_points(spec, points)
-    out = Path(out)
+    folder = Path(out)
+    described = {**spec.to_dict(), "points": points}
+    same = _holds(folder, described)
+    if not same and not force and (folder / "sweep.json").is_file():
+        raise ValueError(f"--out {folder} holds another sweep (its sweep.json differs); give --force to replace "
+                         "it, or another --out (the same sweep run again goes on where it stopped)")
+    owner = claim(folder, force=force, resume=same, what="a sweep")
+    try:
+        outcome = _sweep_into(owner.path, spec, points, described, engine=engine, workers=workers,
+                              address=address, max_group_bytes=max_group_bytes, progress=progress, figure=figure)
+    except BaseException:
+        owner.finish(False)
+        raise
+    else:
+        owner.commit()
+    finally:
+        owner.release()
+    return outcome
+
+
+def _holds(folder: Path, described: dict) -> bool:
+    """Whether ``folder`` holds this very sweep (its ``sweep.json``), so that running it again resumes."""
+    try:
+        return json.loads((folder / "sweep.json").read_text()) == json.loads(json.dumps(described))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+        return False
+
+
+def _sweep_into(out: Path, spec: SweepSpec, points: list, described: dict, *, engine: str, workers: int | None,
+                address: str | None, max_group_bytes: float, progress: bool, figure: bool) -> SweepOutcome:
+    """Run what ``out`` lacks of the sweep and write its tables (``run_sweep``'s work, in a claimed folder)."""
     try:
         (out / "points").mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ValueError(f"cannot create sweep folder {out}: {exc.strerror or exc}") from None
-    atomic_write_json(out / "sweep.json", {**spec.to_dict(), "points": points})
+    atomic_write_json(out / "sweep.json", described)
     items = [(i, seed, spec.config(p, seed)) for i, p in enumerate(points) for seed in spec.seeds()]
     done = store.load_rows(out)
     # A failed row is retried on a rerun (the failure may have been the machine's, not the point's).

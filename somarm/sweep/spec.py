@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from somarm.run.config import RunConfig
-from somarm.validation import check_int
+from somarm.validation import check_int, parse_float
 
 __all__ = ["TASK_PREFIX", "Axis", "SweepSpec", "parse_grid", "parse_random", "preset_value", "same_value", "config_key"]
 
@@ -90,7 +90,7 @@ def parse_random(spec: str) -> Axis:
     if not sep or len(parts) not in (2, 3) or (len(parts) == 3 and parts[2].strip() != "log"):
         raise ValueError(f"--random takes KEY=LOW:HIGH or KEY=LOW:HIGH:log, got {spec!r}")
     try:
-        low, high = float(parts[0]), float(parts[1])
+        low, high = parse_float(key, parts[0]), parse_float(key, parts[1])
     except ValueError:
         raise ValueError(f"--random {spec!r}: LOW and HIGH must be numbers") from None
     if not (math.isfinite(low) and math.isfinite(high)) or low >= high:

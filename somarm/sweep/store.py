@@ -166,7 +166,7 @@ def summary_line(table: Table) -> str:
     text += f"; preset {table.spec.preset} has {' '.join(own_values)}"
     own_point = table.preset_point()
     if own_point is None:
-        text += " (not swept)"
+        text += " (a point this sweep did not run)"
     elif own_point["point"] == best["point"]:
         text += " (the best)"
     else:

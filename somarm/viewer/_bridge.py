@@ -40,6 +40,8 @@ from meshcat.servers.zmqserver import (
     ZMQWebSocketBridge,
 )
 
+from somarm.validation import whole_number
+
 __all__ = ["LoopbackBridge", "main"]
 
 _PARENT_CHECK_MS = 500
@@ -149,9 +151,9 @@ def main(argv: list[str] | None = None) -> int:
     """Start the bridge, write its addresses to the ready file, serve until stopped."""
     parser = argparse.ArgumentParser(prog="somarm.viewer._bridge", allow_abbrev=False)
     parser.add_argument("--host", default="127.0.0.1")
-    parser.add_argument("--port", type=int, default=0)
+    parser.add_argument("--port", type=whole_number, default=0)
     parser.add_argument("--ready-file", required=True)
-    parser.add_argument("--parent-pid", type=int, default=None)
+    parser.add_argument("--parent-pid", type=whole_number, default=None)
     parser.add_argument("--live-task", default=None, help="draw this task and take LiveView frames")
     parser.add_argument("--task-params", default="{}", help="the task's parameters as JSON")
     args = parser.parse_args(argv)

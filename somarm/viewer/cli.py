@@ -16,6 +16,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from somarm.validation import number, whole_number
+
 __all__ = ["main", "build_parser"]
 
 
@@ -39,15 +41,15 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--run", default=None, help="run folder (config.json + learner.npz); default: untrained")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address the page listens on (default 127.0.0.1: this machine only)")
-    parser.add_argument("--port", type=int, default=None, help="web port (default: a free one)")
+    parser.add_argument("--port", type=whole_number, default=None, help="web port (default: a free one)")
     parser.add_argument("--html", default=None, metavar="FILE",
                         help="write a self-contained HTML animation to FILE instead of serving")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the goals shown (default 0)")
-    parser.add_argument("--goals", type=int, default=12,
+    parser.add_argument("--seed", type=whole_number, default=0, help="seed of the goals shown (default 0)")
+    parser.add_argument("--goals", type=whole_number, default=12,
                         help=f"how many goals to cycle through (default 12, at most {MAX_GOALS})")
-    parser.add_argument("--trial", type=int, default=None,
+    parser.add_argument("--trial", type=whole_number, default=None,
                         help="which trial of the run to show, by its trial id (default: the run's first)")
-    parser.add_argument("--interval", type=float, default=1.5, help="seconds per goal when live (default 1.5)")
+    parser.add_argument("--interval", type=number, default=1.5, help="seconds per goal when live (default 1.5)")
     parser.add_argument("--once", action="store_true", help="go through the goals once, then stop")
     parser.add_argument("--task-set", action="append", default=None, metavar="KEY=VALUE",
                         help="change a task parameter over the run's (repeatable), e.g. dynamics=actuated")

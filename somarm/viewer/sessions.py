@@ -93,6 +93,8 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
         task_params = {}
     ids = [int(i) for i in learner.trial_ids]
     if trial is not None and trial not in ids:
+        if run is None:
+            raise ValueError(f"--trial picks a trial of a trained run: give --run DIR with it (got --trial {trial})")
         allowed = f"0..{ids[-1]}" if ids == list(range(len(ids))) else ", ".join(map(str, ids))
         raise ValueError(f"--trial must be one of this run's trials ({allowed}), got {trial}")
     trial = ids.index(ids[0] if trial is None else trial)  # from here on: the index in the batch

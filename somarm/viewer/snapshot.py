@@ -12,6 +12,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from somarm.validation import number, whole_number
+
 __all__ = ["CHROMIUM", "CHROMIUM_ARGS", "screenshot_url", "main"]
 
 CHROMIUM = "/usr/bin/chromium"
@@ -57,10 +59,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("task")
     parser.add_argument("--run", default=None)
     parser.add_argument("--out", required=True)
-    parser.add_argument("--goals", type=int, default=12)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--goal", type=int, default=0, help="which goal of the cycle to show (arm tasks)")
-    parser.add_argument("--wait", type=float, default=1.0, help="seconds to let the page draw (throws fly)")
+    parser.add_argument("--goals", type=whole_number, default=12)
+    parser.add_argument("--seed", type=whole_number, default=0)
+    parser.add_argument("--goal", type=whole_number, default=0, help="which goal of the cycle to show (arm tasks)")
+    parser.add_argument("--wait", type=number, default=1.0, help="seconds to let the page draw (throws fly)")
     args = parser.parse_args(argv)
     from somarm.viewer import sessions, shows
     from somarm.viewer.client import MeshcatClient

@@ -103,3 +103,15 @@ def test_a_file_named_as_out_and_a_locked_folder_are_one_line(tmp_path):
     with pytest.raises(ValueError, match="being written by another somarm process"):
         claim(tmp_path / "run", force=True)
     held.release()
+
+
+def test_a_resumed_run_lists_its_own_files_not_a_users_file_added_between(tmp_path):
+    out = tmp_path / "sweep"
+    _first_run(out, {"results.csv": "1"})
+    _write(out, {"notes.txt": "mine"})
+    owner = claim(out, resume=True)
+    assert not owner.staged and owner.path == out
+    _write(out, {"results.csv": "1,2", "points/b.json": "B"})
+    owner.commit()
+    owner.release()
+    assert json.loads((out / MANIFEST_NAME).read_text())["files"] == ["points/b.json", "results.csv"]

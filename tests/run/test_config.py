@@ -100,7 +100,7 @@ def test_a_config_json_written_before_typed_settings_still_loads():
     assert config == RunConfig(task="reach2", n_trials=2, n_steps=300, seed=3,
                                overrides={"alpha": 0.5, "decay": InverseDecay(250.0), "neighbourhood_q": False},
                                task_params={"radius": 0.2, "dynamics": "kinematic"}).resolved()
-    with pytest.raises(ValueError, match="^alpha=fast: could not convert"):
+    with pytest.raises(ValueError, match="^alpha=fast: alpha must be a number written with the digits 0-9"):
         RunConfig.from_dict({**old, "overrides": {"alpha": "fast"}})
 
 
