@@ -48,7 +48,7 @@ def test_every_animation_frame_holds_the_arm_at_mujocos_pose_along_the_path(task
 
 def test_actuated_reach_paths_start_at_rest_and_end_where_the_error_is_measured():
     session = sessions.load_session("reach2", n_goals=3, seed=2, task_set={"dynamics": "actuated",
-                                                                         "settle_time": "0.5"})
+                                                                         "settle_time": 0.5})
     for path, goal, error in zip(session.paths, session.observations, session.errors, strict=True):
         assert path.shape == (51, 2)
         np.testing.assert_array_equal(path[0], 0.0)
