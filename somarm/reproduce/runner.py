@@ -79,9 +79,7 @@ def reproduce(
       holds the experiments that finished).
 
     Raises:
-      ValueError: an unknown experiment name (the message lists the names), seeds < 1, an
-        unknown backend, or seeds whose training cannot fit in memory (``sizes.check_seeds``);
-        each before anything is written.
+      ValueError: before anything is written: an unknown experiment or backend, seeds < 1 or more than fit in memory.
     """
     names = check_names(only)
     check_int("seeds", seeds)
