@@ -4,7 +4,7 @@ An experiment trains its lockstep groups (its ``groups``) once for all the seeds
 (``common.run_group``), and keeps every group's results until its last seed has been measured;
 so at ``--seeds N`` it holds N times the runs of one seed. ``check_seeds`` refuses a run that
 cannot fit, with the estimate the groups themselves check when built (``run.memory_needs``), before
-the report's folder is claimed, where ``RunGroup`` would refuse it only once the folder holds a report.
+the report's folder is claimed: ``RunGroup``'s own check comes only once the folder is claimed.
 """
 
 from __future__ import annotations
