@@ -423,13 +423,43 @@ def test_a_mujoco_gl_that_cannot_load_does_not_stop_the_command_line(tmp_path, g
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
 
 
-def test_an_address_space_limit_is_a_size_check_not_a_traceback(tmp_path):
+def address_space(kib: int):
+    """A ``preexec_fn`` that gives the child ``ulimit -v kib``: a small memory, the same on every machine."""
     import resource
 
     def limited():
-        resource.setrlimit(resource.RLIMIT_AS, (1_500_000 * 1024, resource.RLIM_INFINITY))  # `ulimit -v 1500000`
+        resource.setrlimit(resource.RLIMIT_AS, (kib * 1024, resource.RLIM_INFINITY))
 
+    return limited
+
+
+def test_an_address_space_limit_is_a_size_check_not_a_traceback(tmp_path):
     done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--trials", "60000", "--no-progress",
                            "--out", str(tmp_path / "run")], capture_output=True, text=True, env=ENV, timeout=120,
-                          preexec_fn=limited)
+                          preexec_fn=address_space(1_500_000))
     one_error_line(done, "needs about", "of memory, more than the", "available")
+
+
+def test_reproduce_seeds_that_cannot_fit_are_refused_at_once_and_leave_no_folder(tmp_path):
+    out = tmp_path / "report"
+    began = time.monotonic()
+    done = somarm("reproduce", "--quick", "--seeds", "100000", "--out", str(out), preexec_fn=address_space(2_000_000))
+    one_error_line(done, "--seeds 100000 (reach2: ", "needs about", "GiB available; give fewer --seeds")
+    assert time.monotonic() - began < 60 and not out.exists()  # no training, no claimed folder, no empty report
+
+
+def test_reproduce_at_a_few_seeds_still_runs_under_the_same_limit(tmp_path):
+    out = tmp_path / "report"
+    done = somarm("reproduce", "--quick", "--only", "reach2", "--seeds", "2", "--no-progress", "--out", str(out),
+                  preexec_fn=address_space(2_000_000), timeout=300)
+    assert done.returncode == 0, done.stderr
+    claims = json.loads((out / "claims.json").read_text())
+    assert claims["seeds"] == [0, 1] and claims["complete"] and list(claims["experiments"]) == ["reach2"]
+
+
+def test_a_sweep_point_that_cannot_fit_is_refused_and_its_folder_not_made(tmp_path):
+    out = tmp_path / "sweep"
+    done = somarm("sweep", "reach2", "--grid", "input_shape=10,2000x2000", "--steps", "200", "--no-progress",
+                  "--out", str(out))
+    one_error_line(done, "sweep point input_shape=2000x2000: a somq learner", "of memory, more than the")
+    assert not out.exists()

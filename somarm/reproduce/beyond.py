@@ -20,7 +20,7 @@ from somarm.reproduce.common import Context, final_error, fmt, preset_choices, r
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
-__all__ = ["TARGETS", "Key", "Trained", "train", "unit_errors", "response_profiles", "beyond"]
+__all__ = ["TARGETS", "Key", "Trained", "groups", "train", "unit_errors", "response_profiles", "beyond"]
 
 #: This project's targets for the interpolated response: greedy error at most this (task: bound, preset).
 TARGETS = {"reach2": (0.012, "table1+"), "throw_distance": (0.15, "table5+")}
@@ -50,18 +50,27 @@ class Trained:
     profiles: dict  #: ``response_profiles``'s answer
 
 
-def _train_runs(ctx: Context) -> tuple[dict[Key, RunResult], dict[Key, np.ndarray]]:
-    """Both responses under each preset of the plan (a task's runs in lockstep); each run's greedy
-    error on fresh observations (1000 for the arms, 500 for the throws; 100 when quick)."""
-    results, greedy = {}, {}
-    for task, preset_names, n_trials, n_steps in _plan(ctx):
-        configs = [
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The runs this experiment trains at ``ctx.seed``, by label: for each task of the plan, both
+    responses under each of its presets (one lockstep group per task)."""
+    return {
+        f"beyond {task}": [
             RunConfig(task=task, preset=preset, overrides={"response": response}, n_trials=n_trials,
                       n_steps=n_steps, seed=ctx.seed)
             for preset in preset_names
             for response in RESPONSES
         ]
-        group = run_group(ctx, f"beyond {task}", configs)
+        for task, preset_names, n_trials, n_steps in _plan(ctx)
+    }
+
+
+def _train_runs(ctx: Context) -> tuple[dict[Key, RunResult], dict[Key, np.ndarray]]:
+    """Both responses under each preset of the plan (``groups``: a task's runs in lockstep); each run's
+    greedy error on fresh observations (1000 for the arms, 500 for the throws; 100 when quick)."""
+    results, greedy = {}, {}
+    for label, configs in groups(ctx).items():
+        group = run_group(ctx, label, configs)
+        task = configs[0].task
         n_obs = ctx.pick(500 if task.startswith("throw") else 1000, 100)
         for config, result in zip(configs, group, strict=True):
             key = (task, config.preset, config.overrides["response"])

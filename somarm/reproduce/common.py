@@ -21,6 +21,7 @@ __all__ = [
     "preset_choices",
     "run",
     "run_group",
+    "at_seeds",
     "run_experiment",
     "typical_trial",
     "fit_circle",
@@ -83,7 +84,7 @@ def run_group(
     """
     if (label, ctx.seed) not in ctx.trained:
         seeds = ctx.seeds or (ctx.seed,)
-        group = [dataclasses.replace(c, seed=s, backend=_backend(c.task, ctx.backend)) for s in seeds for c in configs]
+        group = at_seeds(ctx, configs)
         processes = tasks.threads() if sum(c.n_trials * c.n_steps for c in group) >= SPLIT_TRIAL_STEPS else 1
         if processes > 1:  # a long group: its configs shared out between processes (no shared GIL)
             results = train_split(group, processes=processes, progress=ctx.progress, label=label,
@@ -95,6 +96,13 @@ def run_group(
         for i, s in enumerate(seeds):
             ctx.trained[(label, s)] = results[i * len(configs):(i + 1) * len(configs)]
     return ctx.trained.pop((label, ctx.seed))
+
+
+def at_seeds(ctx: Context, configs: list[RunConfig]) -> list[RunConfig]:
+    """The lockstep group ``run_group`` trains for ``configs``: each at every seed of the run (seed by
+    seed, in order), its rewards through ``ctx.backend`` where the task has it."""
+    seeds = ctx.seeds or (ctx.seed,)
+    return [dataclasses.replace(c, seed=s, backend=_backend(c.task, ctx.backend)) for s in seeds for c in configs]
 
 
 def _backend(task: str, backend: str) -> str:

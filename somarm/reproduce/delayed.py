@@ -14,7 +14,7 @@ from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 from somarm.tasks import obstacle, obstacle_search
 
-__all__ = ["LABELS", "Trained", "train", "measure", "task_wall", "delayed_reward"]
+__all__ = ["LABELS", "Trained", "groups", "train", "measure", "task_wall", "delayed_reward"]
 
 plt = pyplot()
 
@@ -47,8 +47,15 @@ def _greedy_tips(task, learner, start: np.ndarray) -> np.ndarray:
     return obstacle.fingertips(episodes["path"][0, :end])
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The runs this experiment trains at ``ctx.seed``, by label: SOM-Q with gamma 0.9 and 0 on reach2_obstacle."""
+    base = RunConfig(task="reach2_obstacle", preset="obstacle", n_trials=ctx.pick(10, 1),
+                     n_steps=ctx.pick(20_000, 1_000), seed=ctx.seed, block=200)
+    return {"reach2_obstacle gamma 0.9 / 0": [base, dataclasses.replace(base, overrides={"gamma": 0.0})]}
+
+
 def train(ctx: Context) -> Trained:
-    """SOM-Q with gamma 0.9 and 0 in lockstep; greedy episodes of both and of the yardsticks.
+    """SOM-Q with gamma 0.9 and 0 in lockstep (``groups``); greedy episodes of both and of the yardsticks.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
@@ -59,10 +66,8 @@ def train(ctx: Context) -> Trained:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    base = RunConfig(task="reach2_obstacle", preset="obstacle", n_trials=ctx.pick(10, 1),
-                     n_steps=ctx.pick(20_000, 1_000), seed=ctx.seed, block=200)
-    configs = [base, dataclasses.replace(base, overrides={"gamma": 0.0})]
-    results = run_group(ctx, "reach2_obstacle gamma 0.9 / 0", configs)
+    [(label, configs)] = groups(ctx).items()
+    results = run_group(ctx, label, configs)
     n_episodes = ctx.pick(_EPISODES, 20)
     greedy = [evaluation.greedy_episodes(r.learner, r.task, n_episodes=n_episodes, seed=ctx.seed) for r in results]
     task = results[0].task

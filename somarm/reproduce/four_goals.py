@@ -10,7 +10,7 @@ from somarm.reproduce.figures import save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 
-__all__ = ["KINDS", "train", "phase_errors", "four_goals"]
+__all__ = ["KINDS", "switch_step", "groups", "train", "phase_errors", "four_goals"]
 
 plt = plots.pyplot()
 
@@ -18,12 +18,27 @@ plt = plots.pyplot()
 KINDS = ("somq", "motoric")
 
 
-def train(ctx: Context, switch: int) -> dict[str, RunResult]:
-    """Both learners on four_goals with Table 2, the goals moved at ``switch`` (a snapshot there).
+def switch_step(ctx: Context) -> int:
+    """The step at which the goals move (20,000; 1,500 when quick); the run is twice as long."""
+    return ctx.pick(20_000, 1_500)
+
+
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The runs this experiment trains at ``ctx.seed``, by label: both learners (``KINDS``) on four_goals
+    with Table 2, the goals moved at ``switch_step``."""
+    n_trials, switch = ctx.pick(20, 4), switch_step(ctx)
+    return {"Fig 13 four_goals": [
+        RunConfig(task="four_goals", learner=kind, preset="table2", n_trials=n_trials, n_steps=2 * switch,
+                  seed=ctx.seed, task_params={"switch_step": switch})
+        for kind in KINDS
+    ]}
+
+
+def train(ctx: Context) -> dict[str, RunResult]:
+    """Both learners on four_goals (``groups``), with a snapshot where the goals move.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
-      switch: the step at which the goals move.
 
     Returns:
       Each learner's run, by kind (``KINDS``).
@@ -31,13 +46,8 @@ def train(ctx: Context, switch: int) -> dict[str, RunResult]:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials = ctx.pick(20, 4)
-    configs = [
-        RunConfig(task="four_goals", learner=kind, preset="table2", n_trials=n_trials, n_steps=2 * switch,
-                  seed=ctx.seed, task_params={"switch_step": switch})
-        for kind in KINDS
-    ]
-    return dict(zip(KINDS, run_group(ctx, "Fig 13 four_goals", configs, snapshots_at=(switch,)), strict=True))
+    [(label, configs)] = groups(ctx).items()
+    return dict(zip(KINDS, run_group(ctx, label, configs, snapshots_at=(switch_step(ctx),)), strict=True))
 
 
 def phase_errors(steps: np.ndarray, block_means: np.ndarray, switch: int, early: int) -> dict[str, float]:
@@ -134,8 +144,8 @@ def four_goals(ctx: Context) -> Section:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
       ValueError: a figure cannot be written (a full disk), in one line naming it.
     """
-    switch, early = ctx.pick(20_000, 1_500), ctx.pick(5000, 500)
-    runs = train(ctx, switch)
+    switch, early = switch_step(ctx), ctx.pick(5000, 500)
+    runs = train(ctx)
     errors = {kind: phase_errors(r.steps, r.block_means, switch, early) for kind, r in runs.items()}
     config = runs["somq"].config
     section = Section("four_goals", "Figs. 13-15: four goals, moved at t = 20,000 (Table 2)")

@@ -10,7 +10,7 @@ from somarm.reproduce.figures import log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
-__all__ = ["EXPERIMENTS", "train", "random_errors", "single_throw_sd", "more_inputs"]
+__all__ = ["EXPERIMENTS", "groups", "train", "random_errors", "single_throw_sd", "more_inputs"]
 
 plt = pyplot()
 
@@ -23,8 +23,19 @@ EXPERIMENTS = {
 }
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The runs this experiment trains at ``ctx.seed``, by label: experiments A to D (``EXPERIMENTS``),
+    low throws punished."""
+    n_trials, n_steps = ctx.pick(100, 4), ctx.pick(15_000, 1_200)
+    return {"Fig 25 A-D": [
+        RunConfig(task=task, preset=preset, n_trials=n_trials, n_steps=n_steps, seed=ctx.seed,
+                  task_params={"punish_low": True})
+        for task, preset in EXPERIMENTS.values()
+    ]}
+
+
 def train(ctx: Context) -> tuple[dict[str, RunResult], dict[str, float]]:
-    """A to D in lockstep (the four tasks' throws fly in one batch per step; results equal separate
+    """A to D (``groups``) in lockstep (the four tasks' throws fly in one batch per step; results equal separate
     runs), and each task's error under random actions.
 
     Args:
@@ -36,13 +47,8 @@ def train(ctx: Context) -> tuple[dict[str, RunResult], dict[str, float]]:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials, n_steps = ctx.pick(100, 4), ctx.pick(15_000, 1_200)
-    configs = [
-        RunConfig(task=task, preset=preset, n_trials=n_trials, n_steps=n_steps, seed=ctx.seed,
-                  task_params={"punish_low": True})
-        for task, preset in EXPERIMENTS.values()
-    ]
-    results = dict(zip(EXPERIMENTS, run_group(ctx, "Fig 25 A-D", configs), strict=True))
+    [(label, configs)] = groups(ctx).items()
+    results = dict(zip(EXPERIMENTS, run_group(ctx, label, configs), strict=True))
     return results, random_errors(results, ctx.seed)
 
 

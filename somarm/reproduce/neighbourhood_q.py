@@ -12,7 +12,7 @@ from somarm.reproduce.figures import log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 
-__all__ = ["VARIANTS", "WINDOW", "train", "crossing", "speed_up", "neighbourhood_q"]
+__all__ = ["VARIANTS", "WINDOW", "groups", "train", "crossing", "speed_up", "neighbourhood_q"]
 
 plt = plots.pyplot()
 
@@ -26,8 +26,19 @@ VARIANTS = {
 WINDOW = 1000
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The runs this experiment trains at ``ctx.seed``, by label: the three variants of Table 5 on
+    throw_distance (``VARIANTS``)."""
+    n_trials, n_steps = ctx.pick(20, 3), ctx.pick(25_000, 2_000)
+    return {"Fig 24 +NL/-NL": [
+        RunConfig(task="throw_distance", preset="table5", overrides=overrides, n_trials=n_trials,
+                  n_steps=n_steps, seed=ctx.seed)
+        for overrides in VARIANTS.values()
+    ]}
+
+
 def train(ctx: Context) -> dict[str, RunResult]:
-    """The three variants of Table 5 on throw_distance, in lockstep.
+    """The three variants of Table 5 on throw_distance (``groups``), in lockstep.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
@@ -38,13 +49,8 @@ def train(ctx: Context) -> dict[str, RunResult]:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials, n_steps = ctx.pick(20, 3), ctx.pick(25_000, 2_000)
-    configs = [
-        RunConfig(task="throw_distance", preset="table5", overrides=overrides, n_trials=n_trials,
-                  n_steps=n_steps, seed=ctx.seed)
-        for overrides in VARIANTS.values()
-    ]
-    return dict(zip(VARIANTS, run_group(ctx, "Fig 24 +NL/-NL", configs), strict=True))
+    [(label, configs)] = groups(ctx).items()
+    return dict(zip(VARIANTS, run_group(ctx, label, configs), strict=True))
 
 
 def crossing(steps: np.ndarray, block: int, block_means: np.ndarray, level: float) -> float:

@@ -13,7 +13,7 @@ from somarm.reproduce.figures import goal_circle, save, schedule_overlay, unit_s
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
-__all__ = ["Trained", "train", "measure", "topology", "reach2"]
+__all__ = ["Trained", "groups", "train", "measure", "topology", "reach2"]
 
 plt = plots.pyplot()
 
@@ -27,8 +27,15 @@ class Trained:
     goals: np.ndarray  #: ``(2000, 2)`` fresh goals (another stream) for the topology measures
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The run this experiment trains at ``ctx.seed``, by its label: Table 1 on reach2."""
+    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(50_000, 3_000)
+    return {"Figs 7-10 reach2": [RunConfig(task="reach2", preset="table1", n_trials=n_trials, n_steps=n_steps,
+                                           seed=ctx.seed)]}
+
+
 def train(ctx: Context) -> Trained:
-    """Train Table 1 on reach2 and evaluate the greedy response on fresh goals.
+    """Train Table 1 on reach2 (``groups``) and evaluate the greedy response on fresh goals.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
@@ -39,9 +46,8 @@ def train(ctx: Context) -> Trained:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(50_000, 3_000)
-    config = RunConfig(task="reach2", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
-    result = run(ctx, "Figs 7-10 reach2", config)
+    [(label, [config])] = groups(ctx).items()
+    result = run(ctx, label, config)
     greedy = -evaluation.evaluate_greedy(result.learner, result.task, n_observations=2000, seed=ctx.seed)
     goals = result.task.sample_observations(evaluation.evaluation_rng(ctx.seed + 1), 2000)
     return Trained(result, greedy, goals)

@@ -13,7 +13,7 @@ from somarm.reproduce.figures import goal_circle, save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
-__all__ = ["Trained", "train", "posture_distance", "measure", "reach20"]
+__all__ = ["Trained", "groups", "train", "posture_distance", "measure", "reach20"]
 
 plt = pyplot()
 
@@ -32,8 +32,15 @@ class Trained:
     greedy: np.ndarray  #: ``(n_trials, 100)`` the greedy fingertip distance to each goal
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The run this experiment trains at ``ctx.seed``, by its label: Table 1 on reach20."""
+    n_trials, n_steps = ctx.pick(5, 1), ctx.pick(50_000, 3_000)
+    return {"Fig 11 reach20": [RunConfig(task="reach20", preset="table1", n_trials=n_trials, n_steps=n_steps,
+                                         seed=ctx.seed)]}
+
+
 def train(ctx: Context) -> Trained:
-    """Train Table 1 on reach20; the greedy postures for 100 goals evenly around the goal circle.
+    """Train Table 1 on reach20 (``groups``); the greedy postures for 100 goals evenly around the goal circle.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
@@ -44,10 +51,9 @@ def train(ctx: Context) -> Trained:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials, n_steps = ctx.pick(5, 1), ctx.pick(50_000, 3_000)
-    config = RunConfig(task="reach20", preset="table1", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
-    result = run(ctx, "Fig 11 reach20", config)
-    learner, task = result.learner, result.task
+    [(label, [config])] = groups(ctx).items()
+    result = run(ctx, label, config)
+    learner, task, n_trials = result.learner, result.task, result.config.n_trials
     centre, radius = fit_circle(task.sample_observations(evaluation.evaluation_rng(ctx.seed), 4000))
     angles = np.linspace(0, 2 * np.pi, _N_GOALS, endpoint=False)
     goals = centre + radius * np.column_stack([np.cos(angles), np.sin(angles)])

@@ -26,6 +26,7 @@ from somarm.reproduce import (
 )
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section, claim_record, render
+from somarm.reproduce.sizes import check_seeds
 from somarm.tasks.base import BACKENDS
 from somarm.validation import check_int
 
@@ -78,14 +79,14 @@ def reproduce(
       holds the experiments that finished).
 
     Raises:
-      ValueError: an unknown experiment name (the message lists the names), seeds < 1, or an
-        unknown backend.
+      ValueError: before anything is written: an unknown experiment or backend, seeds < 1 or more than fit in memory.
     """
     names = check_names(only)
     check_int("seeds", seeds)
     check_int("jobs", jobs)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+    check_seeds(names, quick=quick, seed=seed, seeds=seeds, backend=backend)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     all_seeds = tuple(range(seed, seed + seeds))
     settings = {"quick": quick, "seeds": list(all_seeds), "backend": backend}

@@ -12,8 +12,8 @@ from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 from somarm.tasks import ballistics
 
-__all__ = ["TABLE3", "TARGET_X", "solution_curve", "landing", "train", "unit_spread", "ends", "steepness",
-           "trajectories", "throw"]
+__all__ = ["TABLE3", "TARGET_X", "solution_curve", "landing", "groups", "train", "unit_spread", "ends",
+           "steepness", "trajectories", "throw"]
 
 plt = pyplot()
 
@@ -38,8 +38,15 @@ def landing(ux: np.ndarray, uy: np.ndarray, *, backend: str, **env) -> np.ndarra
     return throw_task.landing_x(ux, uy, params=throw_task.ThrowParams(**{**TABLE3, **env}), backend=backend)
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The run this experiment trains at ``ctx.seed``, by its label: Table 4 on the throw task."""
+    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(4000, 1500)
+    return {"Figs 16-20 throw": [RunConfig(task="throw", preset="table4", n_trials=n_trials, n_steps=n_steps,
+                                           seed=ctx.seed)]}
+
+
 def train(ctx: Context) -> RunResult:
-    """Table 4 on the throw task, with snapshots of the action map along the run.
+    """Table 4 on the throw task (``groups``), with snapshots of the action map along the run.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
@@ -50,10 +57,9 @@ def train(ctx: Context) -> RunResult:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials, n_steps = ctx.pick(20, 4), ctx.pick(4000, 1500)
-    config = RunConfig(task="throw", preset="table4", n_trials=n_trials, n_steps=n_steps, seed=ctx.seed)
-    spans_at = tuple(t for t in (1, 20, 500, 4000) if t < n_steps) + (n_steps,)
-    return run(ctx, "Figs 16-20 throw", config, snapshots_at=spans_at)
+    [(label, [config])] = groups(ctx).items()
+    spans_at = tuple(t for t in (1, 20, 500, 4000) if t < config.n_steps) + (config.n_steps,)
+    return run(ctx, label, config, snapshots_at=spans_at)
 
 
 def unit_spread(units: np.ndarray, curve: np.ndarray) -> dict[str, np.ndarray]:

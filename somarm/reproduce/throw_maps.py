@@ -14,7 +14,7 @@ from somarm.reproduce.report import Claim, Section
 from somarm.reproduce.throw import landing, solution_curve
 from somarm.run import RunConfig, RunResult
 
-__all__ = ["SIZES", "Trained", "train", "measure", "throw_maps"]
+__all__ = ["SIZES", "Trained", "groups", "train", "measure", "throw_maps"]
 
 plt = plots.pyplot()
 
@@ -31,8 +31,19 @@ class Trained:
     landed: np.ndarray  #: ``(n_trials, n_input_units)`` where its greedy throw lands
 
 
+def groups(ctx: Context) -> dict[str, list[RunConfig]]:
+    """The runs this experiment trains at ``ctx.seed``, by label: Table 5 on throw_distance at each
+    N_A (``SIZES``), three trials each."""
+    n_steps = ctx.pick(10_000, 1_000)
+    return {"Figs 21-23 N_A = 25, 50, 5": [
+        RunConfig(task="throw_distance", preset="table5", overrides={"n_a": n_a}, n_trials=3, n_steps=n_steps,
+                  seed=ctx.seed)
+        for n_a, _ in SIZES
+    ]}
+
+
 def train(ctx: Context) -> dict[int, Trained]:
-    """Table 5 on throw_distance at each N_A, three trials each; the greedy throws' landing points.
+    """Table 5 on throw_distance at each N_A (``groups``); the greedy throws' landing points.
 
     Args:
       ctx: where and how the experiment runs (its seed, quick mode and backend).
@@ -43,18 +54,13 @@ def train(ctx: Context) -> dict[int, Trained]:
     Raises:
       KeyboardInterrupt: the training was stopped (see ``common.run_group``).
     """
-    n_trials, n_steps = 3, ctx.pick(10_000, 1_000)
-    configs = [
-        RunConfig(task="throw_distance", preset="table5", overrides={"n_a": n_a}, n_trials=n_trials,
-                  n_steps=n_steps, seed=ctx.seed)
-        for n_a, _ in SIZES
-    ]
-    grouped = run_group(ctx, "Figs 21-23 N_A = 25, 50, 5", configs)
+    [(label, configs)] = groups(ctx).items()
+    grouped = run_group(ctx, label, configs)
     trained = {}
     for (n_a, _), result in zip(SIZES, grouped, strict=True):
         learner = result.learner
         targets, landed = [], []
-        for i in range(n_trials):
+        for i in range(result.config.n_trials):
             actions = learner.action_weights[i][learner.q[i].argmax(axis=1)]
             targets.append(learner.input_weights[i, :, 0])
             landed.append(landing(actions[:, 0], actions[:, 1], backend=ctx.backend))

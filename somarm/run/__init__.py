@@ -13,7 +13,7 @@ folder. Settings are typed values: the command line's text is read once, at the 
     run.train(RunConfig(task="reach2", learner_config=SOMQConfig(input_shape=(10, 10))))
 """
 
-from somarm.run.build import check_memory_needs, make, make_learner, make_task
+from somarm.run.build import check_memory_needs, make, make_learner, make_task, memory_needs
 from somarm.run.config import RunConfig, add_options, from_options, parse_assignments
 from somarm.run.folder import load, task_for, write
 from somarm.run.group import RunGroup, RunResult, share_lanes, train, train_group
@@ -30,6 +30,7 @@ __all__ = [
     "share_lanes",
     "make_learner",
     "make",
+    "memory_needs",
     "check_memory_needs",
     "train",
     "train_group",

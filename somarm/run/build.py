@@ -11,7 +11,7 @@ from somarm.protocols import BatchedTask, Learner
 from somarm.run.config import RunConfig
 from somarm.validation import check_memory
 
-__all__ = ["make_task", "make_learner", "make", "check_memory_needs"]
+__all__ = ["make_task", "make_learner", "make", "memory_needs", "check_memory_needs"]
 
 #: Memory per trial for its random streams (generators and buffers), task and learner together.
 _STREAM_BYTES_PER_TRIAL = 4096
@@ -52,16 +52,16 @@ def make(config: RunConfig) -> tuple[BatchedTask, Learner]:
     return task, make_learner(config, task)
 
 
-def check_memory_needs(configs: list[RunConfig]) -> None:
-    """Refuse, before the task or a learner is built, runs that cannot fit in memory.
+def memory_needs(configs: list[RunConfig]) -> tuple[str, float]:
+    """What (resolved) configs trained in one group need, ``(description, bytes)``, before anything is built.
 
     A lower bound (one observation and one action dimension) for the learners, plus the learning
     curves (two floats per block and trial) and about 4 KiB per trial for the task's and the
     learner's random streams (measured: 20,000 reach2 trials); each learner checks its exact need
-    again when built.
+    again when built. The seed plays no part: a group at N seeds needs N times one seed's bytes.
 
     Raises:
-      ValueError: one line naming the settings and the size.
+      ValueError: an unknown learner kind, or settings a kind refuses outright (one line).
     """
     from somarm import learners
 
@@ -71,5 +71,14 @@ def check_memory_needs(configs: list[RunConfig]) -> None:
                                                obs_dim=1, action_dim=1)
         total += n_bytes + (16.0 * (config.n_steps // config.block) + _STREAM_BYTES_PER_TRIAL) * config.n_trials
         described.append(what)
-    check_memory(f"{'; '.join(described)}, over {configs[0].n_steps} steps", total,
-                 "use smaller maps, fewer trials or fewer steps (or a larger --block)")
+    return f"{'; '.join(described)}, over {configs[0].n_steps} steps", total
+
+
+def check_memory_needs(configs: list[RunConfig]) -> None:
+    """Refuse, before the task or a learner is built, runs that cannot fit in memory (``memory_needs``).
+
+    Raises:
+      ValueError: one line naming the settings and the size.
+    """
+    what, total = memory_needs(configs)
+    check_memory(what, total, "use smaller maps, fewer trials or fewer steps (or a larger --block)")

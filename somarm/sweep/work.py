@@ -46,7 +46,9 @@ def point_label(point: dict[str, str]) -> str:
 
 
 def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
-    """Check every point's learner settings and task parameters before any training.
+    """Check every point's learner settings and task parameters, and that its run fits in memory
+    (``run.check_memory_needs``: a point trains alone when it is too big for a group), before any
+    training and before the sweep's folder is made.
 
     Raises:
       ValueError: the first bad point, in one line naming it and what is allowed.
@@ -55,6 +57,7 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
     for point in points:
         try:
             config = spec.config(point, spec.seed)  # reads and checks its learner settings and task parameters
+            run.check_memory_needs([config])  # the same at every seed
             task_key = json.dumps(config.task_params, sort_keys=True)
             if task_key not in tasks_checked:
                 run.make_task(config)
