@@ -110,7 +110,11 @@ def _json_number(x) -> float | None:
 
 
 def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
-    """The whole REPORT.md: header, the claims table, then one part per experiment."""
+    """The whole REPORT.md: header, the claims table, then one part per experiment.
+
+    ``out_dir`` is the folder REPORT.md is written to: every figure lies under it and is linked
+    relative to it (``figures/x.png``), never by a path that names the folder.
+    """
     lines = [
         "# somarm: reproduction of Smith (2002)",
         "",
@@ -147,6 +151,8 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
             lines += ["", "This project's choices (the paper gives no value):", ""]
             lines += [f"- {choice}" for choice in section.choices]
         for fig in section.figures:
-            rel = Path(fig).relative_to(out_dir) if Path(fig).is_absolute() else Path(fig)
+            # Relative to REPORT.md's own folder, so that the links hold wherever the folder is read
+            # from, and after a forced run's files move from the staging folder into ``out``.
+            rel = Path(fig).absolute().relative_to(Path(out_dir).absolute())
             lines += ["", f"![{rel.stem}]({rel.as_posix()})"]
     return "\n".join(lines) + "\n"

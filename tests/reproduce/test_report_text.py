@@ -1,0 +1,59 @@
+"""REPORT.md reads right: links that hold from its own folder, wherever --out is."""
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import somarm
+
+#: reach20 and delayed_reward train one trial in quick mode (a count of one) and delayed_reward's
+#: greedy episodes there never reach the goal (a step count that is "never"); four_goals moves its
+#: goals at a different step in quick mode than at full size.
+PARTS = ["reach20", "four_goals", "delayed_reward"]
+LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def _reproduce(cwd: Path, *more: str) -> str:
+    """``somarm reproduce --quick --out report`` run in ``cwd`` (a relative --out); its stdout."""
+    path = os.pathsep.join(p for p in (str(Path(somarm.__file__).parents[1]), os.environ.get("PYTHONPATH")) if p)
+    done = subprocess.run(
+        [sys.executable, "-m", "somarm.cli", "reproduce", "--quick", "--no-progress", "--out", "report",
+         "--only", *PARTS, *more],
+        cwd=cwd, capture_output=True, text=True, timeout=600,
+        env={**os.environ, "MUJOCO_GL": "disable", "PYTHONPATH": path},
+    )
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory) -> dict[str, tuple[Path, str, str]]:
+    """A quick report written with a relative --out, then one forced over it (written into a staging
+    folder and moved in): for each, (its folder, REPORT.md's text, what the command printed)."""
+    cwd = tmp_path_factory.mktemp("cwd")
+    folder = cwd / "report"
+    printed = _reproduce(cwd)
+    first = (folder, (folder / "REPORT.md").read_text(), printed)
+    printed = _reproduce(cwd, "--force")  # the same figures, by the same names
+    return {"relative --out": first, "--force": (folder, (folder / "REPORT.md").read_text(), printed)}
+
+
+@pytest.mark.parametrize("run", ["relative --out", "--force"])
+def test_every_link_in_the_report_resolves_from_its_own_folder(reports, run):
+    folder, text, _ = reports[run]
+    links = LINK.findall(text)
+    assert len(links) >= 5, links
+    for link in links:
+        assert not Path(link).is_absolute() and ".somarm" not in link and not link.startswith("report/"), link
+        assert (folder / link).is_file(), f"{link} does not resolve from {folder}"
+
+
+@pytest.mark.parametrize("run", ["relative --out", "--force"])
+def test_the_printed_report_path_is_where_the_report_ends_up(reports, run):
+    _, _, printed = reports[run]
+    assert re.search(r"^report: report/REPORT\.md \(", printed, re.M), printed
+    assert ".somarm" not in printed
