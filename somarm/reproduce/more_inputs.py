@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from somarm.plots import pyplot
-from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
+from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
 from somarm.reproduce.figures import log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -130,10 +130,10 @@ def more_inputs(ctx: Context) -> Section:
     section = Section("more_inputs", "Fig. 25: more varied inputs, experiments A-D (Tables 6 and 7)")
     section.choices += preset_choices("table7", "table7a")
     section.choices += [
-        f"{config.n_trials} trials of {config.n_steps} throws each; error = minus reward (punishment included), "
-        "mean over the last 100 throws as in Fig. 25. The run length is ours: 0.9997^15000 = 0.011, and in a "
-        "25,000-throw run of all four (100 trials each) every curve was flat after about 15,000 throws "
-        "(final errors A 0.43, B 1.28, C 1.85, D 1.77), at 40% more time.",
+        f"{counted(config.n_trials, 'trial')} of {config.n_steps} throws each; error = minus reward (punishment "
+        "included), mean over the last 100 throws as in Fig. 25. The full run's length, 15,000 throws, is ours: "
+        "0.9997^15000 = 0.011, and in a 25,000-throw run of all four (100 trials each) every curve was flat "
+        "after about 15,000 throws (final errors A 0.43, B 1.28, C 1.85, D 1.77), at 40% more time.",
         "'Degrades from A to D' allows ties within 10%; 'stays reasonable' means D's final error is at most a "
         "third of a uniformly random policy's error on the same task.",
     ]

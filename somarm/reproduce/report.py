@@ -30,13 +30,17 @@ class Claim:
         return f"holds in {held} of {len(self.per_seed)} seeds" + (f" ({undecided} undecided)" if undecided else "")
 
     def spread(self) -> str:
-        """Every seed's numbers and their range, one phrase per number (empty for one seed)."""
+        """Every seed's numbers and their range, one phrase per number (empty for one seed; no range
+        where no seed has the number, e.g. a step count that is never reached)."""
         if not self.per_seed:
             return ""
         phrases = []
         for name in self.per_seed[0][1].values:
             numbers = np.array([c.values.get(name, np.nan) for _, c in self.per_seed], dtype=float)
             listed = ", ".join(_number(v) for v in numbers)
+            if np.isnan(numbers).all():
+                phrases.append(f"{name}: {listed}")
+                continue
             phrases.append(f"{name}: {listed} (range {_number(np.nanmin(numbers))} to {_number(np.nanmax(numbers))}, "
                            f"sd {_number(np.nanstd(numbers))})")
         return "; ".join(phrases)

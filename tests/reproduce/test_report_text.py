@@ -1,4 +1,5 @@
-"""REPORT.md reads right: links that hold from its own folder, wherever --out is."""
+"""REPORT.md reads right: links that hold from its own folder, and sentences built from the run's
+own numbers."""
 
 import os
 import re
@@ -9,6 +10,7 @@ from pathlib import Path
 import pytest
 
 import somarm
+from somarm.reproduce.report import Claim
 
 #: reach20 and delayed_reward train one trial in quick mode (a count of one) and delayed_reward's
 #: greedy episodes there never reach the goal (a step count that is "never"); four_goals moves its
@@ -57,3 +59,27 @@ def test_the_printed_report_path_is_where_the_report_ends_up(reports, run):
     _, _, printed = reports[run]
     assert re.search(r"^report: report/REPORT\.md \(", printed, re.M), printed
     assert ".somarm" not in printed
+
+
+def test_sentences_built_from_counts_read_as_english(reports):
+    _, text, _ = reports["--force"]
+    assert not re.search(r"(?<![\d.,])1 (trial|start|seed|step|throw|episode)s\b", text), \
+        re.findall(r".{40}(?<![\d.,])1 [a-z]+s\b.{20}", text)
+    assert "in never" not in text and "never steps" not in text
+    assert "(s)" not in text
+
+
+def test_four_goals_header_and_body_name_the_same_move_step(reports):
+    _, text, _ = reports["--force"]
+    part = text.split("## Figs. 13-15")[1].split("\n## ")[0]
+    steps = re.findall(r"moved at t = ([\d,]+)", part)
+    assert len(steps) >= 2 and len(set(steps)) == 1, steps  # the header and the choices
+    assert steps[0] != "20,000"  # the full-size step, not this quick run's
+
+
+def test_a_number_no_seed_has_gets_no_range_over_seeds():
+    never = [(seed, Claim("c", "m", False, values={"mean length": float("nan")})) for seed in (0, 1)]
+    merged = Claim("c", "m", False, values={"mean length": float("nan")}, per_seed=never)
+    assert merged.spread() == "mean length: never, never"
+    some = [(0, Claim("c", "m", True, values={"x": 2.0})), (1, Claim("c", "m", False, values={"x": float("nan")}))]
+    assert "range 2 to 2" in Claim("c", "m", None, values={"x": 2.0}, per_seed=some).spread()
