@@ -6,7 +6,7 @@ import numpy as np
 
 from somarm.plots import pyplot
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import log_error_axes, save
+from somarm.reproduce.figures import legend_below, log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
@@ -97,7 +97,7 @@ def _figure(ctx: Context, results: dict[str, RunResult]):
     for (label, r), colour in zip(results.items(), ("C0", "C1", "C2", "C3"), strict=True):
         left.plot(r.steps, -r.block_means.mean(axis=1), color=colour, label=f"{label}: {EXPERIMENTS[label][0]}")
     log_error_axes(left, xlabel="throw", ylabel="error (mean over last 100 throws)",
-                   title=f"Fig. 25 (left): mean of {results['A'].config.n_trials} trials")
+                   title=f"Fig. 25 (left): mean of {results['A'].config.n_trials} trials", legend=legend_below())
     for label, colour in (("A", "C0"), ("C", "C2")):
         r = results[label]
         mean_e = -r.block_means.mean(axis=1)
@@ -107,7 +107,7 @@ def _figure(ctx: Context, results: dict[str, RunResult]):
                            label=f"{label}: +/- sd of single throws")
     right.set(xlabel="throw", ylabel="error", title="Fig. 25 (right): spread of the data for A and C")
     right.grid(alpha=0.3)
-    right.legend()
+    right.legend(**legend_below())
     return save(ctx, fig, "fig25_more_inputs.png")
 
 

@@ -8,7 +8,7 @@ from somarm import plots
 from somarm.learners.schedules import ExponentialDecay
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import log_error_axes, save
+from somarm.reproduce.figures import legend_below, log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
 
@@ -120,7 +120,7 @@ def _figure(ctx: Context, results: dict[str, RunResult], level: float):
     ax.axhline(level, color="0.5", ls="--", lw=0.8, label=f"near-optimal level {level:.3f}")
     n_trials = results["+NL/0.9985"].config.n_trials
     log_error_axes(ax, xlabel="throw", ylabel=f"error (mean over last {WINDOW} throws)",
-                   title=f"Fig. 24: neighbourhood Q-learning, mean of {n_trials} trials", legend={"loc": "upper right"})
+                   title=f"Fig. 24: neighbourhood Q-learning, mean of {n_trials} trials", legend=legend_below())
     twin = ax.twinx()
     for c, colour in ((0.9985, "C0"), (0.9997, "C2")):
         twin.plot(steps, c**steps, ls=":", color=colour)

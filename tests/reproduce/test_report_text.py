@@ -1,5 +1,5 @@
-"""REPORT.md reads right: links that hold from its own folder, and sentences built from the run's
-own numbers."""
+"""REPORT.md reads right: links that hold from its own folder, sentences built from the run's own numbers,
+and legends beside the curves rather than on them."""
 
 import os
 import re
@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 import somarm
+from somarm.reproduce import more_inputs, neighbourhood_q, runner
 from somarm.reproduce.report import Claim
 
 #: reach20 and delayed_reward train one trial in quick mode (a count of one) and delayed_reward's
@@ -83,3 +84,25 @@ def test_a_number_no_seed_has_gets_no_range_over_seeds():
     assert merged.spread() == "mean length: never, never"
     some = [(0, Claim("c", "m", True, values={"x": 2.0})), (1, Claim("c", "m", False, values={"x": float("nan")}))]
     assert "range 2 to 2" in Claim("c", "m", None, values={"x": 2.0}, per_seed=some).spread()
+
+
+def test_the_legends_of_figs_24_and_25_lie_outside_every_axes(tmp_path, monkeypatch):
+    drawn = []
+    for module in (neighbourhood_q, more_inputs):
+        original = module.save
+        monkeypatch.setattr(module, "save", lambda ctx, fig, name, _save=original, **kw: (
+            drawn.append((name, _legend_overlaps(fig))), _save(ctx, fig, name, **kw))[1])
+    assert runner.reproduce(tmp_path, quick=True, only=["neighbourhood_q", "more_inputs"], progress=False) == 0
+    assert [name for name, _ in drawn] == ["fig24_neighbourhood_q.png", "fig25_more_inputs.png"]
+    for name, (n_legends, overlaps) in drawn:
+        assert n_legends >= 1 and not overlaps, (name, overlaps)
+
+
+def _legend_overlaps(fig) -> tuple[int, list[str]]:
+    """How many legends the figure's axes hold, and those whose box overlaps an axes' plotting area."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    overlaps = [f"{legend.get_texts()[0].get_text()!r} over {ax.get_title()!r}" for legend in legends
+                for ax in fig.axes if legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))]
+    return len(legends), overlaps
