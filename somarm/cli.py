@@ -174,7 +174,8 @@ def _cmd_reproduce(args) -> int:
     sigterm_as_interrupt()
     try:
         status = runner.reproduce(owner.path, quick=args.quick, only=args.only, progress=not args.no_progress,
-                                  seeds=args.seeds, seed=args.seed, backend=args.backend, jobs=args.jobs)
+                                  seeds=args.seeds, seed=args.seed, backend=args.backend, jobs=args.jobs,
+                                  final_out=owner.folder)
         owner.commit()  # a finished report, or the part an interrupted run wrote
         return status
     except ValueError:  # a file could not be written: the report says which experiments it keeps

@@ -124,12 +124,16 @@ def draw_input_map(
     grid_shape: tuple[int, ...],
     *,
     labels: tuple[str, str] = ("x", "y"),
+    colourbar: str | None = None,
 ) -> None:
     """Input units in input space (first two dimensions), shaded by their greedy action unit.
 
     Args:
       weights: ``(n_input_units, obs_dim)``; a 1-D input space is drawn as unit index vs weight.
       greedy: ``(n_input_units,)`` index of each unit's greedy action unit.
+      n_actions: how many action units the shades span (``unit_colours(n_actions)``).
+      colourbar: the label of a colour bar beside the map, from action unit 0 to ``n_actions - 1``
+        (None: no colour bar).
     """
     colours = unit_colours(n_actions)[greedy]
     if weights.shape[1] == 1:
@@ -141,6 +145,16 @@ def draw_input_map(
     ax.scatter(points[:, 0], points[:, 1], c=colours, s=28, edgecolors="k", linewidths=0.4, zorder=2)
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
+    if colourbar is not None:
+        _unit_colourbar(ax, n_actions, colourbar)
+
+
+def _unit_colourbar(ax: plt.Axes, n_units: int, label: str) -> None:
+    """A colour bar for ``unit_colours(n_units)``: unit i has the shade at i / (n_units - 1)."""
+    shades = plt.cm.ScalarMappable(norm=plt.Normalize(0, max(n_units - 1, 1)), cmap="viridis")
+    bar = ax.figure.colorbar(shades, ax=ax, label=label, fraction=0.046, pad=0.04)
+    bar.locator = plt.MaxNLocator(integer=True)
+    bar.update_ticks()
 
 
 def draw_action_map(
@@ -237,8 +251,10 @@ def run_figures(result, out: Path) -> list[Path]:
 
     record = tasks.record(config.task)
     observation_labels, action_labels = record.observation_labels, record.action_labels
-    draw_input_map(ax, input_weights, greedy, n_actions, grid_shape, labels=(*observation_labels, "")[:2])
-    ax.set_title(f"input map (trial {first}), shaded by greedy action unit")
+    shade, units = ("greedy action unit", "action map") if learner.has_action_map else ("input unit", "input map")
+    draw_input_map(ax, input_weights, greedy, n_actions, grid_shape, labels=(*observation_labels, "")[:2],
+                   colourbar=f"{shade} (its index in the {units})")
+    ax.set_title(f"input map (trial {first}), shaded by {shade}")
     paths.append(save(fig, out / "input_map.png"))
 
     fig, ax = plt.subplots(figsize=(5, 5))

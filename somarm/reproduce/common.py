@@ -27,6 +27,7 @@ __all__ = [
     "fit_circle",
     "final_error",
     "fmt",
+    "counted",
 ]
 
 
@@ -154,6 +155,11 @@ def fmt(x: float, digits: int = 3) -> str:
     if float(x).is_integer() and abs(x) < 1e7:
         return str(int(x))
     return f"{x:.{digits}g}" if abs(x) < 1e-3 or abs(x) >= 1e4 else f"{x:.{digits}f}"
+
+
+def counted(n: int, noun: str) -> str:
+    """``n`` with its noun, plural unless ``n`` is one: ``counted(1, "trial")`` is "1 trial", 4 give "4 trials"."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def run_experiment(experiment: Callable[[Context], Section], out: Path, *, quick: bool, seeds: tuple[int, ...],

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from somarm.plots import pyplot
-from somarm.reproduce.common import Context, fmt, preset_choices, run_group
+from somarm.reproduce.common import Context, counted, fmt, preset_choices, run_group
 from somarm.reproduce.figures import save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -104,25 +104,32 @@ def measure(trained: Trained) -> dict:
     }
 
 
+def _when_arriving(length: float, arrived: str, never: str) -> str:
+    """``arrived`` with the mean length of the episodes that reach the goal (NaN: none does, ``never``)."""
+    return arrived.format(fmt(length, 3)) if np.isfinite(length) else never
+
+
 def _claims(m: dict, n_trials: int, n_episodes: int, n_starts: int) -> list[Claim]:
     rate, length, best = m["rate"], m["length"], m["best"]
     return [
         Claim("Delayed reward: SOM-Q with gamma 0.9 learns to go around the wall to the goal (this project's "
               "target, not the paper's).",
               f"gamma 0.9: {fmt(100 * rate[0], 3)}% of {n_trials} x {n_episodes} greedy episodes reach the goal "
-              f"(worst trial {fmt(100 * m['worst'][0], 3)}%), in {fmt(length[0], 3)} steps on average",
+              f"(worst trial {fmt(100 * m['worst'][0], 3)}%)"
+              + _when_arriving(length[0], ", in {} steps on average", "") + ".",
               rate[0] >= 0.9, ">= 90% of greedy episodes from the task's start distribution reach the goal",
               values={"success gamma 0.9": rate[0]}),
         Claim("Without delayed reward (gamma 0) SOM-Q follows the next reward into the wall and reaches the goal "
               "clearly less often.",
               f"gamma 0: {fmt(100 * rate[1], 3)}% (gamma 0.9: {fmt(100 * rate[0], 3)}%); random target changes: "
-              f"{fmt(100 * m['random_rate'], 3)}%; the distance-greedy policy: {fmt(100 * m['distance_rate'], 3)}%",
+              f"{fmt(100 * m['random_rate'], 3)}%; the distance-greedy policy: {fmt(100 * m['distance_rate'], 3)}%.",
               rate[1] <= rate[0] - 0.5, "gamma 0 at least 50 points below gamma 0.9",
               values={"success gamma 0": rate[1], "success gamma 0.9": rate[0]}),
         Claim("Greedy episodes with gamma 0.9 are close to the shortest path.",
-              f"mean {fmt(length[0], 3)} steps against a shortest path of {fmt(best, 3)} steps "
-              f"(breadth-first search over the nine corner/edge/null moves, {n_starts} start(s)); "
-              f"random target changes take {fmt(m['random_length'], 3)} steps when they arrive",
+              _when_arriving(length[0], "mean {} steps", "no greedy episode reaches the goal")
+              + f"; the shortest path takes {fmt(best, 3)} steps (breadth-first search over the nine "
+              f"corner/edge/null moves, {counted(n_starts, 'start')}); random target changes "
+              + _when_arriving(m["random_length"], "take {} steps when they arrive", "never arrive") + ".",
               bool(np.isfinite(length[0]) and length[0] <= 2 * best), "mean length <= 2 x the shortest path",
               values={"mean length": length[0], "shortest path": best}),
     ]
@@ -185,8 +192,8 @@ def delayed_reward(ctx: Context) -> Section:
         "moves the joint targets by at most 0.4 rad, the servos track them for 0.3 s with MuJoCo contacts, "
         "and the reward is -(1 + d), d the fingertip's distance to the goal. Going straight at the goal ends "
         "at the wall (d = 0.21); going around folds the elbow under the wall, first moving away.",
-        f"Both learners trained in lockstep on the same start poses, {config.n_trials} trials of {config.n_steps} "
-        f"steps; episodes that end (goal, or 20 steps) restart in their own trial at the next step.",
+        f"Both learners trained in lockstep on the same start poses, {counted(config.n_trials, 'trial')} of "
+        f"{config.n_steps} steps; episodes that end (goal, or 20 steps) restart in their own trial at the next step.",
     ]
     claims = _claims(measure(trained), config.n_trials, len(trained.starts), len(trained.shortest_steps))
     return Section(

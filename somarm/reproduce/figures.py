@@ -12,7 +12,8 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce.common import Context
 
-__all__ = ["save", "unit_square", "goal_circle", "schedule_overlay", "throw_action_map", "log_error_axes"]
+__all__ = ["save", "unit_square", "goal_circle", "schedule_overlay", "throw_action_map", "log_error_axes",
+           "legend_below"]
 
 plt = plots.pyplot()
 
@@ -81,6 +82,12 @@ def throw_action_map(ax, curve: np.ndarray, units: np.ndarray, *, curve_style: d
     """
     ax.plot(curve[:, 0], curve[:, 1], **curve_style)
     plots.draw_action_map(ax, units, np.zeros(2), np.ones(2), normalise=False, labels=labels)
+
+
+def legend_below(ncol: int = 2) -> dict:
+    """``ax.legend`` settings that put the legend under the axes (below the x label), where it hides
+    no curve however the curves run."""
+    return {"loc": "upper center", "bbox_to_anchor": (0.5, -0.14), "ncol": ncol, "frameon": False}
 
 
 def log_error_axes(ax, *, xlabel: str, ylabel: str, title: str, legend: dict | None = None) -> None:

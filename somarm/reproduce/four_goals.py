@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from somarm import plots
-from somarm.reproduce.common import MOTORIC_CHOICE, Context, fmt, preset_choices, run_group, typical_trial
+from somarm.reproduce.common import (
+    MOTORIC_CHOICE,
+    Context,
+    counted,
+    fmt,
+    preset_choices,
+    run_group,
+    typical_trial,
+)
 from somarm.reproduce.figures import save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
@@ -148,14 +156,14 @@ def four_goals(ctx: Context) -> Section:
     runs = train(ctx)
     errors = {kind: phase_errors(r.steps, r.block_means, switch, early) for kind, r in runs.items()}
     config = runs["somq"].config
-    section = Section("four_goals", "Figs. 13-15: four goals, moved at t = 20,000 (Table 2)")
+    section = Section("four_goals", f"Figs. 13-15: four goals, moved at t = {switch:,} (Table 2)")
     section.choices += preset_choices("table2")
     section.choices.append(MOTORIC_CHOICE)
     section.choices += [
-        f"{config.n_trials} trials of {config.n_steps} steps, goals moved at t = {switch}; goal positions "
-        "before and after the move are this project's (see the task).",
-        "'Learns faster' is measured as the mean error over the first 5000 steps of each phase "
-        "(first 500 in quick mode) and over the whole phase.",
+        f"{counted(config.n_trials, 'trial')} of {config.n_steps:,} steps, goals moved at t = {switch:,}; goal "
+        "positions before and after the move are this project's (see the task).",
+        f"'Learns faster' is measured as the mean error over the first {early:,} steps of each phase "
+        "and over the whole phase.",
     ]
     section.claims.append(_claim(errors))
     section.figures.append(_curves_figure(ctx, runs, switch))

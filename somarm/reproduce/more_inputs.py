@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from somarm.plots import pyplot
-from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
-from somarm.reproduce.figures import log_error_axes, save
+from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
+from somarm.reproduce.figures import legend_below, log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
@@ -103,7 +103,7 @@ def _figure(ctx: Context, results: dict[str, RunResult]):
     for (label, r), colour in zip(results.items(), ("C0", "C1", "C2", "C3"), strict=True):
         left.plot(r.steps, -r.block_means.mean(axis=1), color=colour, label=f"{label}: {EXPERIMENTS[label][0]}")
     log_error_axes(left, xlabel="throw", ylabel="error (mean over last 100 throws)",
-                   title=f"Fig. 25 (left): mean of {results['A'].config.n_trials} trials")
+                   title=f"Fig. 25 (left): mean of {results['A'].config.n_trials} trials", legend=legend_below())
     for label, colour in (("A", "C0"), ("C", "C2")):
         r = results[label]
         mean_e = -r.block_means.mean(axis=1)
@@ -113,7 +113,7 @@ def _figure(ctx: Context, results: dict[str, RunResult]):
                            label=f"{label}: +/- sd of single throws")
     right.set(xlabel="throw", ylabel="error", title="Fig. 25 (right): spread of the data for A and C")
     right.grid(alpha=0.3)
-    right.legend()
+    right.legend(**legend_below())
     return save(ctx, fig, "fig25_more_inputs.png")
 
 
@@ -136,10 +136,10 @@ def more_inputs(ctx: Context) -> Section:
     section = Section("more_inputs", "Fig. 25: more varied inputs, experiments A-D (Tables 6 and 7)")
     section.choices += preset_choices("table7", "table7a")
     section.choices += [
-        f"{config.n_trials} trials of {config.n_steps} throws each; error = minus reward (punishment included), "
-        "mean over the last 100 throws as in Fig. 25. The run length is ours: 0.9997^15000 = 0.011, and in a "
-        "25,000-throw run of all four (100 trials each) every curve was flat after about 15,000 throws "
-        "(final errors A 0.43, B 1.28, C 1.85, D 1.77), at 40% more time.",
+        f"{counted(config.n_trials, 'trial')} of {config.n_steps} throws each; error = minus reward (punishment "
+        "included), mean over the last 100 throws as in Fig. 25. The full run's length, 15,000 throws, is ours: "
+        "0.9997^15000 = 0.011, and in a 25,000-throw run of all four (100 trials each) every curve was flat "
+        "after about 15,000 throws (final errors A 0.43, B 1.28, C 1.85, D 1.77), at 40% more time.",
         "'Degrades from A to D' allows ties within 10%; 'stays reasonable' means D's final error is at most a "
         "third of a uniformly random policy's error on the same task.",
     ]

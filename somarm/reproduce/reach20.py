@@ -8,7 +8,16 @@ import numpy as np
 
 from somarm.plots import pyplot
 from somarm.reproduce import metrics
-from somarm.reproduce.common import Context, final_error, fit_circle, fmt, preset_choices, run, typical_trial
+from somarm.reproduce.common import (
+    Context,
+    counted,
+    final_error,
+    fit_circle,
+    fmt,
+    preset_choices,
+    run,
+    typical_trial,
+)
 from somarm.reproduce.figures import goal_circle, save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -137,7 +146,8 @@ def reach20(ctx: Context) -> Section:
     section = Section("reach20", "Fig. 11: twenty-link arm, postures for a sweep of goals (Table 1)")
     section.choices += preset_choices("table1")
     section.choices += [
-        f"Table 1's parameters with a 20-D action map; {config.n_trials} trials of {config.n_steps} steps.",
+        f"Table 1's parameters with a 20-D action map; {counted(config.n_trials, 'trial')} of {config.n_steps} "
+        "steps.",
         "Posture distance: root-mean-square of the wrapped joint-angle differences. 'Nearby goals, similar "
         "postures' holds when neighbouring goals of a 100-goal sweep differ in posture at most a quarter as "
         "much as random goal pairs, and posture distance rises with goal distance (Spearman >= 0.5).",

@@ -30,13 +30,17 @@ class Claim:
         return f"holds in {held} of {len(self.per_seed)} seeds" + (f" ({undecided} undecided)" if undecided else "")
 
     def spread(self) -> str:
-        """Every seed's numbers and their range, one phrase per number (empty for one seed)."""
+        """Every seed's numbers and their range, one phrase per number (empty for one seed; no range
+        where no seed has the number, e.g. a step count that is never reached)."""
         if not self.per_seed:
             return ""
         phrases = []
         for name in self.per_seed[0][1].values:
             numbers = np.array([c.values.get(name, np.nan) for _, c in self.per_seed], dtype=float)
             listed = ", ".join(_number(v) for v in numbers)
+            if np.isnan(numbers).all():
+                phrases.append(f"{name}: {listed}")
+                continue
             phrases.append(f"{name}: {listed} (range {_number(np.nanmin(numbers))} to {_number(np.nanmax(numbers))}, "
                            f"sd {_number(np.nanstd(numbers))})")
         return "; ".join(phrases)
@@ -110,7 +114,11 @@ def _json_number(x) -> float | None:
 
 
 def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
-    """The whole REPORT.md: header, the claims table, then one part per experiment."""
+    """The whole REPORT.md: header, the claims table, then one part per experiment.
+
+    ``out_dir`` is the folder REPORT.md is written to: every figure lies under it and is linked
+    relative to it (``figures/x.png``), never by a path that names the folder.
+    """
     lines = [
         "# somarm: reproduction of Smith (2002)",
         "",
@@ -147,6 +155,8 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
             lines += ["", "This project's choices (the paper gives no value):", ""]
             lines += [f"- {choice}" for choice in section.choices]
         for fig in section.figures:
-            rel = Path(fig).relative_to(out_dir) if Path(fig).is_absolute() else Path(fig)
+            # Relative to REPORT.md's own folder, so that the links hold wherever the folder is read
+            # from, and after a forced run's files move from the staging folder into ``out``.
+            rel = Path(fig).absolute().relative_to(Path(out_dir).absolute())
             lines += ["", f"![{rel.stem}]({rel.as_posix()})"]
     return "\n".join(lines) + "\n"

@@ -63,7 +63,7 @@ def check_names(only: list[str] | None) -> list[str]:
 
 def reproduce(
     out: Path, *, quick: bool = False, only: list[str] | None = None, seed: int = 0, progress: bool = True,
-    seeds: int = 1, backend: str = "mujoco", jobs: int = 1,
+    seeds: int = 1, backend: str = "mujoco", jobs: int = 1, final_out: Path | None = None,
 ) -> int:
     """Run the chosen experiments and write ``out/REPORT.md``, ``out/claims.json`` and the figures.
 
@@ -73,6 +73,8 @@ def reproduce(
       backend: where every reward is computed, "mujoco" (default) or "analytic" (closed forms).
       jobs: experiments run at once, each in its own process (``somarm.reproduce.parallel``); 1
         (default) runs them one after another in this process, with progress bars.
+      final_out: the folder the report ends up in when the caller moves it there from ``out`` (a
+        forced run writes into a staging folder first); the path printed at the end. Default ``out``.
 
     Returns:
       0 when every experiment ran (whatever the verdicts), 130 when interrupted (the report then
@@ -116,11 +118,16 @@ def reproduce(
         raise ValueError(f"{exc}, the report keeps the {len(sections)} experiment(s) that finished") from None
     total = time.perf_counter() - start
     _write(out, sections, total=total, complete=status == 0, **settings)
+    _print_summary(sections, (final_out or out) / "REPORT.md", seeds=seeds, total=total)
+    return status
+
+
+def _print_summary(sections: list[Section], report: Path, *, seeds: int, total: float) -> None:
+    """The last line: where the report is, how many claims hold, and the wall time."""
     held = sum(c.holds is True for s in sections for c in s.claims)
     claims = sum(len(s.claims) for s in sections)
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
-    print(f"report: {out / 'REPORT.md'} ({held} of {claims} claims hold{over}; {total:.1f} s)")
-    return status
+    print(f"report: {report} ({held} of {claims} claims hold{over}; {total:.1f} s)")
 
 
 def _run_in_turn(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quick: bool,

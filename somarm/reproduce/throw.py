@@ -6,7 +6,7 @@ import numpy as np
 
 from somarm.plots import pyplot
 from somarm.reproduce import metrics
-from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run, typical_trial
+from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run, typical_trial
 from somarm.reproduce.figures import save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
@@ -255,7 +255,7 @@ def throw(ctx: Context) -> Section:
     section = Section("throw", "Figs. 16-20: throwing at a target X = 4 (Tables 3 and 4)")
     section.choices += preset_choices("table4")
     section.choices += [
-        f"{config.n_trials} trials of {config.n_steps} throws (the paper shows one typical trial).",
+        f"{counted(config.n_trials, 'trial')} of {config.n_steps} throws (the paper shows one typical trial).",
         "A unit lies on the curve when its distance to Eq. 8's curve in the velocity square is at most 0.02; "
         "the lowest, hardest throws count as avoided when the lowest unit's u_y is above the curve's lowest "
         "point (at u_x = 1) by more than 0.02.",

@@ -8,7 +8,7 @@ import numpy as np
 
 from somarm import plots
 from somarm.reproduce import metrics
-from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group
+from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
 from somarm.reproduce.figures import save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.reproduce.throw import landing, solution_curve
@@ -160,8 +160,8 @@ def throw_maps(ctx: Context) -> Section:
     section = Section("throw_maps", "Figs. 21-23: varied target distance, action neighbourhoods 25, 50, 5")
     section.choices += preset_choices("table5")
     section.choices += [
-        f"{config.n_trials} trials of {config.n_steps} throws per neighbourhood (f = 0.9985^throw is below 0.001 "
-        "by throw 4600).",
+        f"{counted(config.n_trials, 'trial')} of {config.n_steps} throws per neighbourhood (f = 0.9985^throw is "
+        "below 0.001 by throw 4600).",
         "Equal spacing: coefficient of variation of the gaps between the sorted input units, interior units "
         "only (the end units sit inside the range, as a SOM's do), at most 0.3.",
         "'Greedy throws land near their targets': mean |landing - input unit| at most 0.25 (targets span 9).",
