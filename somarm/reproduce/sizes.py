@@ -9,40 +9,24 @@ the report's folder is claimed: ``RunGroup``'s own check comes only once the fol
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from somarm.reproduce import (
-    beyond,
-    delayed,
-    four_goals,
-    more_inputs,
-    neighbourhood_q,
-    reach2,
-    reach20,
-    throw,
-    throw_maps,
-)
 from somarm.reproduce.common import Context, at_seeds
 from somarm.run import RunConfig, memory_needs
 from somarm.validation import check_memory
 
-__all__ = ["GROUPS", "memory_at_seeds", "check_seeds"]
+__all__ = ["groups_of", "memory_at_seeds", "check_seeds"]
 
-#: Each experiment's ``groups`` by its name in ``runner.EXPERIMENTS``. ``peers`` has none: its
-#: comparisons (``somarm.peers.compare``) run one seed after another and keep only their numbers, so
-#: its memory does not grow with ``--seeds``.
-GROUPS: dict[str, Callable[[Context], dict[str, list[RunConfig]]]] = {
-    "reach2": reach2.groups,
-    "reach20": reach20.groups,
-    "four_goals": four_goals.groups,
-    "throw": throw.groups,
-    "throw_maps": throw_maps.groups,
-    "neighbourhood_q": neighbourhood_q.groups,
-    "more_inputs": more_inputs.groups,
-    "delayed_reward": delayed.groups,
-    "beyond": beyond.groups,
-}
+def groups_of(name: str) -> Callable[[Context], dict[str, list[RunConfig]]] | None:
+    """The ``groups`` of experiment ``name`` of ``runner.EXPERIMENTS``: its module's, the one owner of
+    its trial counts (None for one that declares none, as ``peers``, whose comparisons run one seed
+    after another and keep only their numbers, so its memory does not grow with ``--seeds``)."""
+    from somarm.reproduce.runner import EXPERIMENTS, OPTIONAL  # (the runner imports this module)
+
+    experiment = {**EXPERIMENTS, **OPTIONAL}[name]
+    return getattr(sys.modules[experiment.__module__], "groups", None)
 
 
 def memory_at_seeds(name: str, *, quick: bool, seed: int, seeds: int, backend: str) -> tuple[str, float]:
@@ -53,7 +37,7 @@ def memory_at_seeds(name: str, *, quick: bool, seed: int, seeds: int, backend: s
     not depend on the seed, so this equals the estimate of its groups at every seed).
 
     Args:
-      name: a key of ``GROUPS``. quick, seed, seeds, backend: as ``runner.reproduce`` takes them.
+      name: an experiment that declares its groups (``groups_of``). quick, seed, seeds, backend: as ``runner.reproduce`` takes them.
 
     Returns:
       ``(description, bytes)``: the description names each group's learners, trials and steps.
@@ -63,7 +47,7 @@ def memory_at_seeds(name: str, *, quick: bool, seed: int, seeds: int, backend: s
     """
     ctx = Context(out_dir=Path(), quick=quick, seed=seed, progress=False, backend=backend, figures=False)
     described, per_seed = [], 0.0
-    for configs in GROUPS[name](ctx).values():
+    for configs in groups_of(name)(ctx).values():
         what, n_bytes = memory_needs([config.resolved() for config in at_seeds(ctx, configs)])
         described.append(what)
         per_seed += n_bytes
@@ -82,6 +66,6 @@ def check_seeds(names: list[str], *, quick: bool, seed: int, seeds: int, backend
     hint = " or ".join(["give fewer --seeds"] * (seeds > 1) + ["give --quick"] * (not quick)
                        + ["leave the experiment out (--only the others)"])
     for name in names:
-        if name in GROUPS:
+        if groups_of(name) is not None:
             what, n_bytes = memory_at_seeds(name, quick=quick, seed=seed, seeds=seeds, backend=backend)
             check_memory(f"--seeds {seeds} ({name}: {what}, at each of {seeds} seed(s))", n_bytes, hint)

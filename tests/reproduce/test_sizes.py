@@ -14,11 +14,11 @@ class _Trained(Exception):
 
 
 def test_every_experiment_of_the_paper_declares_its_groups_and_peers_has_none():
-    assert list(sizes.GROUPS) == list(runner.EXPERIMENTS)
-    assert not set(sizes.GROUPS) & set(runner.OPTIONAL)
+    assert all(sizes.groups_of(name) is not None for name in runner.EXPERIMENTS)
+    assert sizes.groups_of("peers") is None
 
 
-@pytest.mark.parametrize("name", list(sizes.GROUPS))
+@pytest.mark.parametrize("name", list(runner.EXPERIMENTS))
 def test_an_experiment_trains_the_groups_it_declares(name, monkeypatch):
     seen = []
 
@@ -30,7 +30,7 @@ def test_an_experiment_trains_the_groups_it_declares(name, monkeypatch):
     ctx = Context(out_dir=Path("unused"), quick=True, seed=3, progress=False, seeds=(3, 4))
     with pytest.raises(_Trained):
         runner.EXPERIMENTS[name](ctx)
-    label, configs = next(iter(sizes.GROUPS[name](ctx).items()))  # the first group trains first
+    label, configs = next(iter(sizes.groups_of(name)(ctx).items()))  # the first group trains first
     assert seen == [(label, common.at_seeds(ctx, configs))]
 
 
@@ -40,7 +40,7 @@ def test_the_memory_at_several_seeds_is_the_estimate_of_the_groups_trained_at_al
     what, n_bytes = sizes.memory_at_seeds(name, seed=5, seeds=3, **quick)
     ctx = Context(out_dir=Path("unused"), seed=5, seeds=(5, 6, 7), **quick)
     groups = [run.memory_needs([c.resolved() for c in common.at_seeds(ctx, configs)])
-              for configs in sizes.GROUPS[name](ctx).values()]
+              for configs in sizes.groups_of(name)(ctx).values()]
     assert n_bytes == pytest.approx(sum(size for _, size in groups), rel=1e-12)
     assert n_bytes == pytest.approx(3 * sizes.memory_at_seeds(name, seed=5, seeds=1, **quick)[1], rel=1e-12)
     assert what.count("over") == len(groups) and "trial(s)" in what
