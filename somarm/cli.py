@@ -166,7 +166,8 @@ def _cmd_reproduce(args) -> int:
     check_int("--seeds", args.seeds)
     check_int("--jobs", args.jobs)
     # Before --out is claimed: a run that cannot fit must leave no folder and no report behind.
-    sizes.check_seeds(names, quick=args.quick, seed=args.seed, seeds=args.seeds, backend=args.backend)
+    sizes.check_seeds({n: {**runner.EXPERIMENTS, **runner.OPTIONAL}[n] for n in names}, quick=args.quick,
+                      seed=args.seed, seeds=args.seeds, backend=args.backend)
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
     # into an earlier one: its REPORT.md and claims.json would then mix two runs).

@@ -88,7 +88,8 @@ def reproduce(
     check_int("jobs", jobs)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
-    check_seeds(names, quick=quick, seed=seed, seeds=seeds, backend=backend)
+    check_seeds({n: {**EXPERIMENTS, **OPTIONAL}[n] for n in names}, quick=quick, seed=seed, seeds=seeds,
+                backend=backend)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     all_seeds = tuple(range(seed, seed + seeds))
     settings = {"quick": quick, "seeds": list(all_seeds), "backend": backend}

@@ -19,25 +19,24 @@ from somarm.validation import check_memory
 
 __all__ = ["groups_of", "memory_at_seeds", "check_seeds"]
 
-def groups_of(name: str) -> Callable[[Context], dict[str, list[RunConfig]]] | None:
-    """The ``groups`` of experiment ``name`` of ``runner.EXPERIMENTS``: its module's, the one owner of
-    its trial counts (None for one that declares none, as ``peers``, whose comparisons run one seed
-    after another and keep only their numbers, so its memory does not grow with ``--seeds``)."""
-    from somarm.reproduce.runner import EXPERIMENTS, OPTIONAL  # (the runner imports this module)
-
-    experiment = {**EXPERIMENTS, **OPTIONAL}[name]
+def groups_of(experiment: Callable[[Context], object]) -> Callable[[Context], dict[str, list[RunConfig]]] | None:
+    """The ``groups`` of an experiment (a function of ``runner.EXPERIMENTS``): its module's, the one
+    owner of its trial counts; None for one that declares none, as ``peers``, whose comparisons run
+    one seed after another and keep only their numbers, so its memory does not grow with ``--seeds``."""
     return getattr(sys.modules[experiment.__module__], "groups", None)
 
 
-def memory_at_seeds(name: str, *, quick: bool, seed: int, seeds: int, backend: str) -> tuple[str, float]:
-    """What experiment ``name`` trains at each seed, and the bytes it needs at the seeds
+def memory_at_seeds(experiment: Callable[[Context], object], *, quick: bool, seed: int, seeds: int,
+                    backend: str) -> tuple[str, float]:
+    """What ``experiment`` trains at each seed, and the bytes it needs at the seeds
     ``seed .. seed + seeds - 1``.
 
     The sum over its groups of ``run.memory_needs`` at one seed, times ``seeds`` (the estimate does
     not depend on the seed, so this equals the estimate of its groups at every seed).
 
     Args:
-      name: an experiment that declares its groups (``groups_of``). quick, seed, seeds, backend: as ``runner.reproduce`` takes them.
+      experiment: one that declares its groups (``groups_of``).
+      quick, seed, seeds, backend: as ``runner.reproduce`` takes them.
 
     Returns:
       ``(description, bytes)``: the description names each group's learners, trials and steps.
@@ -47,14 +46,15 @@ def memory_at_seeds(name: str, *, quick: bool, seed: int, seeds: int, backend: s
     """
     ctx = Context(out_dir=Path(), quick=quick, seed=seed, progress=False, backend=backend, figures=False)
     described, per_seed = [], 0.0
-    for configs in groups_of(name)(ctx).values():
+    for configs in groups_of(experiment)(ctx).values():
         what, n_bytes = memory_needs([config.resolved() for config in at_seeds(ctx, configs)])
         described.append(what)
         per_seed += n_bytes
     return "; ".join(described), per_seed * seeds
 
 
-def check_seeds(names: list[str], *, quick: bool, seed: int, seeds: int, backend: str) -> None:
+def check_seeds(experiments: dict[str, Callable[[Context], object]], *, quick: bool, seed: int, seeds: int,
+                backend: str) -> None:
     """Refuse a reproduction whose training cannot fit in the memory available now, before anything
     is written: each experiment alone, as its groups check themselves (with ``--jobs`` several run
     at once, each in its own process).
@@ -65,7 +65,7 @@ def check_seeds(names: list[str], *, quick: bool, seed: int, seeds: int, backend
     """
     hint = " or ".join(["give fewer --seeds"] * (seeds > 1) + ["give --quick"] * (not quick)
                        + ["leave the experiment out (--only the others)"])
-    for name in names:
-        if groups_of(name) is not None:
-            what, n_bytes = memory_at_seeds(name, quick=quick, seed=seed, seeds=seeds, backend=backend)
+    for name, experiment in experiments.items():
+        if groups_of(experiment) is not None:
+            what, n_bytes = memory_at_seeds(experiment, quick=quick, seed=seed, seeds=seeds, backend=backend)
             check_memory(f"--seeds {seeds} ({name}: {what}, at each of {seeds} seed(s))", n_bytes, hint)

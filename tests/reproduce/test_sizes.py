@@ -14,8 +14,8 @@ class _Trained(Exception):
 
 
 def test_every_experiment_of_the_paper_declares_its_groups_and_peers_has_none():
-    assert all(sizes.groups_of(name) is not None for name in runner.EXPERIMENTS)
-    assert sizes.groups_of("peers") is None
+    assert all(sizes.groups_of(experiment) is not None for experiment in runner.EXPERIMENTS.values())
+    assert sizes.groups_of(runner.OPTIONAL["peers"]) is None
 
 
 @pytest.mark.parametrize("name", list(runner.EXPERIMENTS))
@@ -30,19 +30,19 @@ def test_an_experiment_trains_the_groups_it_declares(name, monkeypatch):
     ctx = Context(out_dir=Path("unused"), quick=True, seed=3, progress=False, seeds=(3, 4))
     with pytest.raises(_Trained):
         runner.EXPERIMENTS[name](ctx)
-    label, configs = next(iter(sizes.groups_of(name)(ctx).items()))  # the first group trains first
+    label, configs = next(iter(sizes.groups_of(runner.EXPERIMENTS[name])(ctx).items()))  # the first group trains first
     assert seen == [(label, common.at_seeds(ctx, configs))]
 
 
 @pytest.mark.parametrize("name", ["reach2", "beyond"])
 def test_the_memory_at_several_seeds_is_the_estimate_of_the_groups_trained_at_all_of_them(name):
     quick = {"quick": True, "backend": "analytic"}
-    what, n_bytes = sizes.memory_at_seeds(name, seed=5, seeds=3, **quick)
+    what, n_bytes = sizes.memory_at_seeds(runner.EXPERIMENTS[name], seed=5, seeds=3, **quick)
     ctx = Context(out_dir=Path("unused"), seed=5, seeds=(5, 6, 7), **quick)
     groups = [run.memory_needs([c.resolved() for c in common.at_seeds(ctx, configs)])
-              for configs in sizes.groups_of(name)(ctx).values()]
+              for configs in sizes.groups_of(runner.EXPERIMENTS[name])(ctx).values()]
     assert n_bytes == pytest.approx(sum(size for _, size in groups), rel=1e-12)
-    assert n_bytes == pytest.approx(3 * sizes.memory_at_seeds(name, seed=5, seeds=1, **quick)[1], rel=1e-12)
+    assert n_bytes == pytest.approx(3 * sizes.memory_at_seeds(runner.EXPERIMENTS[name], seed=5, seeds=1, **quick)[1], rel=1e-12)
     assert what.count("over") == len(groups) and "trial(s)" in what
 
 
@@ -59,5 +59,5 @@ def test_seeds_that_cannot_fit_are_refused_in_one_line_before_the_report_folder_
 
 def test_seeds_that_fit_pass_and_the_peers_part_is_not_sized(monkeypatch):
     monkeypatch.setattr(validation, "_available_memory", lambda: 2**30)
-    sizes.check_seeds(list(runner.EXPERIMENTS), quick=True, seed=0, seeds=2, backend="mujoco")
-    sizes.check_seeds(["peers"], quick=False, seed=0, seeds=100_000, backend="mujoco")
+    sizes.check_seeds(runner.EXPERIMENTS, quick=True, seed=0, seeds=2, backend="mujoco")
+    sizes.check_seeds(runner.OPTIONAL, quick=False, seed=0, seeds=100_000, backend="mujoco")
