@@ -1,4 +1,4 @@
-"""Measures behind the report's verdicts: topology, curve distances, spacing, speed of learning.
+"""Measures behind the report's verdicts: failed trials, topology, curve distances, spacing, speed of learning.
 
 Pure NumPy on plain arrays, so every verdict in REPORT.md can be recomputed and tested alone.
 """
@@ -9,7 +9,6 @@ import numpy as np
 
 __all__ = [
     "FAILED_FACTOR",
-    "FAILED_TRIAL",
     "failed_trials",
     "chebyshev_distances",
     "topographic_error",
@@ -22,11 +21,9 @@ __all__ = [
     "spearman",
 ]
 
-#: A trial has failed when its error is above this multiple of the median error over the run's trials.
+#: A trial has failed when its error is above this multiple of the median error over the run's trials
+#: (docs/results.md, "How results are measured", says so for every report).
 FAILED_FACTOR = 2.0
-#: The definition in words, for the reports (docs/results.md, "A failed trial", says the same).
-FAILED_TRIAL = ("a trial 'fails' when its error is above twice the median error over the run's trials "
-                "(the paper's Fig. 8: 'failed to achieve close to mean performance')")
 
 
 def failed_trials(errors: np.ndarray, factor: float = FAILED_FACTOR) -> np.ndarray:
