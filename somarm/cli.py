@@ -263,7 +263,8 @@ def _parser() -> argparse.ArgumentParser:
 
     evaluate = sub.add_parser("evaluate", help="greedy mean reward of a trained run (an episodic task's: mean return)")
     evaluate.add_argument("run", help="run folder written by `somarm train`")
-    evaluate.add_argument("--observations", type=whole_number, default=1000, help="fresh observations (1000)")
+    evaluate.add_argument("--observations", type=whole_number, default=1000,
+                          help="fresh observations (1000); an episodic task runs 100 greedy episodes per trial")
     evaluate.add_argument("--seed", type=whole_number,
                           help="seed of the fresh observations (default: the run's seed, as summary.json)")
     evaluate.set_defaults(func=_cmd_evaluate)
