@@ -112,11 +112,12 @@ def _train_into(out: Path, group, args, owner) -> int:
     if result.interrupted:
         print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
         return 130
-    mean = extra.get("greedy_mean_reward", float("nan"))
-    print(
-        f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
-        f"greedy mean reward {mean:+.4f}; results in {out}"
-    )
+    if "greedy_mean_return" in extra:  # an episodic task: whole greedy episodes, not one step
+        greedy = f"greedy mean return {extra['greedy_mean_return']:+.4f}"
+    else:
+        greedy = f"greedy mean reward {extra.get('greedy_mean_reward', float('nan')):+.4f}"
+    print(f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
+          f"{greedy}; results in {out}")
     return 0
 
 
@@ -143,11 +144,21 @@ def _cmd_evaluate(args) -> int:
     check_int("--observations", args.observations)
     config, learner = run.load(args.run)
     seed = config.seed if args.seed is None else args.seed  # the run's own: the number summary.json has
+    task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
+    if task.episodic:  # whole greedy episodes, as summary.json has them (--observations does not apply)
+        greedy = run.greedy_measures(learner, task, seed=seed)
+        print(
+            f"{config.task}: greedy mean return {greedy['greedy_mean_return']:+.4f} (sd "
+            f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); success rate "
+            f"{greedy['greedy_success_rate']:.1%}; mean episode length {greedy['greedy_mean_episode_length']:.2f} "
+            f"steps (a failed episode counts at the step limit); {greedy['greedy_episodes']} greedy episodes "
+            f"per trial, seed {seed}"
+        )
+        return 0
     # Observations, actions and rewards of every trial, in float64, about twice over while they are made.
     width = learner.observation_low.size + learner.action_low.size + 2
     check_memory(f"--observations {args.observations} for {learner.n_trials} trial(s)",
                  16.0 * args.observations * learner.n_trials * width, "give fewer --observations")
-    task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
     rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=seed)
     print(
         f"{config.task}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "
@@ -254,9 +265,10 @@ def _parser() -> argparse.ArgumentParser:
     train.add_argument("--port", type=whole_number, help="viewer web port, with --view (default: a free one)")
     train.set_defaults(func=_cmd_train)
 
-    evaluate = sub.add_parser("evaluate", help="greedy mean reward of a trained run")
+    evaluate = sub.add_parser("evaluate", help="greedy mean reward of a trained run (an episodic task's: mean return)")
     evaluate.add_argument("run", help="run folder written by `somarm train`")
-    evaluate.add_argument("--observations", type=whole_number, default=1000, help="fresh observations (1000)")
+    evaluate.add_argument("--observations", type=whole_number, default=1000,
+                          help="fresh observations (1000); an episodic task runs 100 greedy episodes per trial")
     evaluate.add_argument("--seed", type=whole_number,
                           help="seed of the fresh observations (default: the run's seed, as summary.json)")
     evaluate.set_defaults(func=_cmd_evaluate)

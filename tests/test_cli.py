@@ -237,6 +237,27 @@ def test_evaluate_scores_with_the_runs_seed_unless_told(tmp_path, capsys):
     assert len(err) == 1 and "--observations 10000000000 for 2 trial(s) needs about" in err[0], err
 
 
+def test_an_episodic_run_reports_its_greedy_return_not_a_one_step_reward(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["train", "reach2_obstacle", "--steps", "200", "--trials", "2", "--no-progress", "--no-figures",
+                 "--out", str(out)]) == 0
+    trained = capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert {"greedy_mean_return", "greedy_sd_return", "greedy_success_rate", "greedy_mean_episode_length"} <= set(
+        summary)
+    assert "greedy_mean_reward" not in summary and "greedy_sd_reward" not in summary
+    # Every step pays at most -1, and a failed episode counts at the 20-step limit.
+    assert summary["greedy_mean_return"] <= -summary["greedy_mean_episode_length"] < 0
+    assert 1 <= summary["greedy_mean_episode_length"] <= 20
+    if summary["greedy_success_rate"] == 0:
+        assert summary["greedy_mean_episode_length"] == 20
+    assert f"greedy mean return {summary['greedy_mean_return']:+.4f}" in trained
+    assert main(["evaluate", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert f"greedy mean return {summary['greedy_mean_return']:+.4f}" in said, said
+    assert f"success rate {summary['greedy_success_rate']:.1%}" in said and "reward" not in said
+
+
 def test_reproduce_and_compare_take_a_first_seed(tmp_path):
     from somarm.reproduce import runner
 

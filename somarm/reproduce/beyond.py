@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from somarm.learners.somq import RESPONSES
-from somarm.reproduce import beyond_figures
+from somarm.reproduce import beyond_figures, metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group, typical_trial
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -201,15 +201,15 @@ def _not_worse_claims(greedy) -> list[Claim]:
 
 
 def _outliers(errors: np.ndarray) -> str:
-    """Median, the trials that failed (greedy error above 5x the median) and the mean without them."""
+    """Median, the failed trials (``metrics.failed_trials`` of the greedy errors) and the mean without them."""
     median = float(np.median(errors))
-    failed = np.flatnonzero(errors > 5 * median)
+    failed = np.flatnonzero(metrics.failed_trials(errors))
     text = f"Median over trials {fmt(median, 4)}"
     if failed.size == 0:
-        return text + "; no trial failed (none above 5x the median)."
+        return text + "; no trial failed (none above twice the median)."
     rest = np.delete(errors, failed)
     listed = ", ".join(f"trial {i} ({fmt(errors[i], 3)})" for i in failed)
-    return (f"{text}; {failed.size} of {errors.size} trials failed (above 5x the median): {listed}; "
+    return (f"{text}; {failed.size} of {errors.size} trials failed (above twice the median): {listed}; "
             f"the other {rest.size} trials average {fmt(rest.mean(), 4)} (max {fmt(rest.max(), 4)}).")
 
 

@@ -82,20 +82,22 @@ def train(ctx: Context) -> Trained:
 
 
 def measure(trained: Trained) -> dict:
-    """Success rates (mean and worst trial) and mean lengths of each run, and the yardsticks'.
+    """Success rates (mean and worst trial), mean lengths and returns of each run, and the yardsticks'.
 
     Args:
       trained: ``train``'s answer.
 
     Returns:
-      The numbers the claims read, by name (``rate``, ``worst``, ``length``: one per run).
+      The numbers the claims read, by name (``rate``, ``worst``, ``length``, ``return``: one per run).
+      A length is the mean over all greedy episodes, a failed one counting at the step limit; a
+      return is the undiscounted return per episode, mean over episodes and trials.
     """
-    lengths = [g["mean_length"][np.isfinite(g["mean_length"])] for g in trained.greedy]
     random_runs = trained.random_runs
     return {
         "rate": [float(g["success_rate"].mean()) for g in trained.greedy],
         "worst": [float(g["success_rate"].min()) for g in trained.greedy],
-        "length": [float(x.mean()) if x.size else float("nan") for x in lengths],
+        "length": [float(g["mean_length"].mean()) for g in trained.greedy],
+        "return": [float(g["mean_return"].mean()) for g in trained.greedy],
         "random_rate": float(random_runs["success"].mean()),
         "random_length": float(random_runs["length"][random_runs["success"]].mean())
         if random_runs["success"].any() else float("nan"),
@@ -105,7 +107,7 @@ def measure(trained: Trained) -> dict:
 
 
 def _when_arriving(length: float, arrived: str, never: str) -> str:
-    """``arrived`` with the mean length of the episodes that reach the goal (NaN: none does, ``never``)."""
+    """``arrived`` with the mean length of the episodes that reach the goal (NaN: none does: ``never``)."""
     return arrived.format(fmt(length, 3)) if np.isfinite(length) else never
 
 
@@ -115,10 +117,12 @@ def _claims(m: dict, n_trials: int, n_episodes: int, n_starts: int) -> list[Clai
         Claim("Delayed reward: SOM-Q with gamma 0.9 learns to go around the wall to the goal (this project's "
               "target, not the paper's).",
               f"gamma 0.9: {fmt(100 * rate[0], 3)}% of {n_trials} x {n_episodes} greedy episodes reach the goal "
-              f"(worst trial {fmt(100 * m['worst'][0], 3)}%)"
-              + _when_arriving(length[0], ", in {} steps on average", "") + ".",
+              f"(worst trial {fmt(100 * m['worst'][0], 3)}%); mean episode length {fmt(length[0], 3)} steps "
+              f"(a failed episode counts at the step limit), mean return {fmt(m['return'][0], 3)} "
+              f"(gamma 0: {fmt(m['return'][1], 3)}).",
               rate[0] >= 0.9, ">= 90% of greedy episodes from the task's start distribution reach the goal",
-              values={"success gamma 0.9": rate[0]}),
+              values={"success gamma 0.9": rate[0], "return gamma 0.9": m["return"][0],
+                      "return gamma 0": m["return"][1]}),
         Claim("Without delayed reward (gamma 0) SOM-Q follows the next reward into the wall and reaches the goal "
               "clearly less often.",
               f"gamma 0: {fmt(100 * rate[1], 3)}% (gamma 0.9: {fmt(100 * rate[0], 3)}%); random target changes: "
@@ -126,8 +130,8 @@ def _claims(m: dict, n_trials: int, n_episodes: int, n_starts: int) -> list[Clai
               rate[1] <= rate[0] - 0.5, "gamma 0 at least 50 points below gamma 0.9",
               values={"success gamma 0": rate[1], "success gamma 0.9": rate[0]}),
         Claim("Greedy episodes with gamma 0.9 are close to the shortest path.",
-              _when_arriving(length[0], "mean {} steps", "no greedy episode reaches the goal")
-              + f"; the shortest path takes {fmt(best, 3)} steps (breadth-first search over the nine "
+              f"mean {fmt(length[0], 3)} steps (over all greedy episodes, a failed one counting at the step "
+              f"limit) against a shortest path of {fmt(best, 3)} steps (breadth-first search over the nine "
               f"corner/edge/null moves, {counted(n_starts, 'start')}); random target changes "
               + _when_arriving(m["random_length"], "take {} steps when they arrive", "never arrive") + ".",
               bool(np.isfinite(length[0]) and length[0] <= 2 * best), "mean length <= 2 x the shortest path",

@@ -1,4 +1,4 @@
-"""Measures behind the report's verdicts: topology, curve distances, spacing, speed of learning.
+"""Measures behind the report's verdicts: failed trials, topology, curve distances, spacing, speed of learning.
 
 Pure NumPy on plain arrays, so every verdict in REPORT.md can be recomputed and tested alone.
 """
@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "FAILED_FACTOR",
+    "failed_trials",
     "chebyshev_distances",
     "topographic_error",
     "nearest_is_neighbour",
@@ -18,6 +20,36 @@ __all__ = [
     "steps_to_level",
     "spearman",
 ]
+
+#: A trial has failed when its error is above this multiple of the median error over the run's trials
+#: (docs/results.md, "How results are measured", says so for every report).
+FAILED_FACTOR = 2.0
+
+
+def failed_trials(errors: np.ndarray, factor: float = FAILED_FACTOR) -> np.ndarray:
+    """Which trials failed: an error above ``factor`` times the median error over the trials.
+
+    The one definition every report and doc counts failed trials by. Relative to the median, so it
+    reads the same on every task and measure (a distance, a miss, a training error), as the paper's
+    Fig. 8 does ("failed to achieve close to mean performance"); the median, not the mean, so the
+    failed trials do not raise their own threshold.
+
+    Args:
+      errors: ``(n_trials,)`` one error per trial (lower is better, >= 0).
+      factor: the multiple of the median above which a trial has failed (> 1).
+
+    Returns:
+      ``(n_trials,)`` bools, True for a failed trial.
+
+    Raises:
+      ValueError: no trial, a non-finite error, or ``factor`` not above 1.
+    """
+    errors = np.asarray(errors, dtype=float)
+    if errors.ndim != 1 or errors.size == 0 or not np.isfinite(errors).all():
+        raise ValueError(f"errors must be a non-empty 1-D array of finite numbers, got shape {errors.shape}")
+    if not factor > 1.0:
+        raise ValueError(f"factor must be above 1, got {factor!r}")
+    return errors > factor * float(np.median(errors))
 
 
 def chebyshev_distances(grid: np.ndarray) -> np.ndarray:

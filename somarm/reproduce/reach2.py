@@ -93,7 +93,7 @@ def measure(trained: Trained) -> dict:
     return {
         "errors": errors,
         "median": median,
-        "failed": int((errors > 2 * median).sum()),
+        "failed": int(metrics.failed_trials(errors).sum()),
         "allowed": max(1, round(n_trials / 20)),
         **topology(learner.input_weights, learner.input_grid, learner.action_weights, learner.action_grid,
                    learner.q, trained.goals),
@@ -108,7 +108,7 @@ def _claims(m: dict, greedy: np.ndarray) -> list[Claim]:
         Claim(
             "Fig. 8: at most about one trial in twenty fails to reach near-mean performance.",
             f"{m['failed']} of {len(errors)} trials have a final error above twice the median "
-            f"({fmt(2 * m['median'])}); final errors {fmt(errors.min())} to {fmt(errors.max())}.",
+            f"({fmt(metrics.FAILED_FACTOR * m['median'])}); final errors {fmt(errors.min())} to {fmt(errors.max())}.",
             m["failed"] <= m["allowed"],
             f"failures <= {m['allowed']}",
             values={"failing trials": m["failed"]},

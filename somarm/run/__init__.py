@@ -18,7 +18,7 @@ from somarm.run.config import RunConfig, add_options, from_options, parse_assign
 from somarm.run.folder import load, task_for, write
 from somarm.run.group import RunGroup, RunResult, share_lanes, train, train_group
 from somarm.run.loop import final_rewards
-from somarm.run.summary import greedy_summary, summary
+from somarm.run.summary import greedy_cost, greedy_measures, greedy_summary, summary
 
 __all__ = [
     "RunConfig",
@@ -35,6 +35,8 @@ __all__ = [
     "train",
     "train_group",
     "RunGroup",
+    "greedy_measures",
+    "greedy_cost",
     "greedy_summary",
     "summary",
     "write",

@@ -53,8 +53,11 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
       seed: seed of the evaluation stream.
 
     Returns:
-      ``{"success_rate": (n_trials,), "mean_length": (n_trials,)}``: the fraction of episodes that
-      reach the goal, and the mean steps of those that do (NaN for a trial that never does).
+      ``{"success_rate", "mean_length", "mean_return"}``, each ``(n_trials,)``: the fraction of
+      episodes that reach the goal; the mean steps over all episodes, a failed episode counting at
+      the step limit (where ``run_episodes`` cuts it); and the mean undiscounted return per episode.
+      A trial that reaches the goal once in 100 episodes thus has a mean length near the step limit,
+      not the length of its one success.
 
     Raises:
       ValueError: a task without whole episodes, or a bad ``n_episodes``.
@@ -69,9 +72,8 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
         return learner.predict(angles.reshape(n_trials, n_episodes, -1)).reshape(len(angles), -1)
 
     episodes = task.run_episodes(policy, np.tile(starts, (n_trials, 1)))
-    success = episodes["success"].reshape(n_trials, n_episodes)
-    lengths = np.where(success, episodes["length"].reshape(n_trials, n_episodes), 0)
-    reached = success.sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_length = np.where(reached > 0, lengths.sum(axis=1) / np.maximum(reached, 1), np.nan)
-    return {"success_rate": success.mean(axis=1), "mean_length": mean_length}
+    return {
+        "success_rate": episodes["success"].reshape(n_trials, n_episodes).mean(axis=1),
+        "mean_length": episodes["length"].reshape(n_trials, n_episodes).mean(axis=1),
+        "mean_return": episodes["returns"].reshape(n_trials, n_episodes).mean(axis=1),
+    }

@@ -7,41 +7,76 @@ from typing import Any
 import numpy as np
 
 from somarm import __version__
+from somarm.protocols import BatchedTask, Learner
 from somarm.run.group import RunResult
 from somarm.run.loop import final_blocks, final_rewards
 
-__all__ = ["greedy_summary", "summary"]
+__all__ = ["GREEDY_EPISODES", "greedy_measures", "greedy_cost", "greedy_summary", "summary"]
+
+#: Greedy episodes per trial of an episodic task, from the task's start distribution.
+GREEDY_EPISODES = 100
 
 
-def greedy_summary(result: RunResult, n_observations: int = 1000) -> dict[str, Any]:
-    """The summary keys of a greedy evaluation on fresh observations (seeded by the run's seed).
+def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observations: int = 1000) -> dict[str, Any]:
+    """The greedy keys of ``summary.json`` for a trained learner on its task.
 
-    A failed evaluation gives ``{"greedy_error": message}`` instead, so the run is still written.
+    A one-step task scores the greedy action on ``n_observations`` fresh observations:
+    ``greedy_mean_reward`` and ``greedy_sd_reward`` (mean over observations per trial, then mean
+    and sd over trials), ``greedy_observations``. An episodic task (``task.episodic``) runs
+    ``GREEDY_EPISODES`` whole greedy episodes per trial instead, since one step from rest says
+    nothing of where an episode goes: ``greedy_mean_return`` and ``greedy_sd_return`` (the
+    undiscounted return per episode, mean over episodes per trial, then mean and sd over trials),
+    ``greedy_success_rate`` (episodes reaching the goal, over all trials), and
+    ``greedy_mean_episode_length`` (steps over all episodes, a failed episode counting at the step
+    limit), ``greedy_episodes``.
+
+    Raises:
+      ValueError: the learner cannot act on the task (the caller reports it).
     """
     from somarm.run import evaluation
 
-    if result.steps_done == 0:
-        return {}
-    try:
-        greedy = evaluation.evaluate_greedy(result.learner, result.task, n_observations=n_observations,
-                                            seed=result.config.seed)
-    except ValueError as exc:
-        return {"greedy_error": str(exc)}
-    out = {
+    if task.episodic:
+        episodes = evaluation.greedy_episodes(learner, task, n_episodes=GREEDY_EPISODES, seed=seed)
+        return {
+            "greedy_mean_return": float(episodes["mean_return"].mean()),
+            "greedy_sd_return": float(episodes["mean_return"].std()),
+            "greedy_success_rate": float(episodes["success_rate"].mean()),
+            "greedy_mean_episode_length": float(episodes["mean_length"].mean()),
+            "greedy_episodes": GREEDY_EPISODES,
+        }
+    greedy = evaluation.evaluate_greedy(learner, task, n_observations=n_observations, seed=seed)
+    return {
         "greedy_mean_reward": float(greedy.mean()),
         "greedy_sd_reward": float(greedy.std()),
         "greedy_observations": n_observations,
     }
-    if result.task.episodic:  # whole greedy episodes from the task's start poses
-        episodes = evaluation.greedy_episodes(result.learner, result.task, n_episodes=100,
-                                              seed=result.config.seed)
-        lengths = episodes["mean_length"][np.isfinite(episodes["mean_length"])]
-        out.update({
-            "greedy_success_rate": float(episodes["success_rate"].mean()),
-            "greedy_mean_episode_length": float(lengths.mean()) if lengths.size else None,
-            "greedy_episodes": 100,
-        })
-    return out
+
+
+def greedy_cost(greedy: dict[str, Any]) -> tuple[float, float]:
+    """What a run is ranked by, lower is better, and its sd over trials, from ``greedy_measures``'s keys.
+
+    Minus the greedy return of an episodic task (its steps plus the distances along the way), minus
+    the greedy one-step reward of the others (the distance to the goal, or the miss of a throw).
+
+    Raises:
+      KeyError: neither a return nor a one-step reward (a failed or missing evaluation).
+    """
+    if "greedy_mean_return" in greedy:
+        return -greedy["greedy_mean_return"], greedy["greedy_sd_return"]
+    return -greedy["greedy_mean_reward"], greedy["greedy_sd_reward"]
+
+
+def greedy_summary(result: RunResult, n_observations: int = 1000) -> dict[str, Any]:
+    """The summary keys of the run's greedy evaluation (``greedy_measures``, seeded by the run's seed).
+
+    A failed evaluation gives ``{"greedy_error": message}`` instead, so the run is still written.
+    """
+    if result.steps_done == 0:
+        return {}
+    try:
+        return greedy_measures(result.learner, result.task, seed=result.config.seed, n_observations=n_observations)
+    except ValueError as exc:
+        return {"greedy_error": str(exc)}
 
 
 def _number_or_none(x: float) -> float | None:

@@ -11,6 +11,7 @@ import numpy as np
 
 from somarm import plots
 from somarm.sweep.spec import preset_value, same_value
+from somarm.sweep.work import greedy_name
 
 __all__ = ["draw"]
 
@@ -69,7 +70,8 @@ def draw(table, path: Path) -> Path:
             ax.axvline(slot, color="0.3", ls="--", lw=0.8, label=f"preset {table.spec.preset}")
         ax.set_xlabel(key)
         ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("greedy error (fresh observations)")
+    name = greedy_name(table.spec.task)
+    axes[0][0].set_ylabel(name if name != "greedy error" else "greedy error (fresh observations)")
     handles = {}
     for ax in axes[0]:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):

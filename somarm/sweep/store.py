@@ -20,7 +20,7 @@ import numpy as np
 
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.sweep.spec import TASK_PREFIX, SweepSpec, config_key, preset_value, same_value
-from somarm.sweep.work import METRICS, point_label
+from somarm.sweep.work import METRICS, greedy_name, point_label
 
 __all__ = ["Table", "save_row", "load_rows", "write_outputs", "summary_line"]
 
@@ -149,7 +149,8 @@ def summary_line(table: Table) -> str:
     done = f"{len(table.rows)} of {len(table.rows) + table.missing} runs done"
     if best is None:
         return f"summary: no point finished every seed ({done})"
-    text = (f"summary: best {point_label(best['values'])}, greedy error {best['greedy_error']:.4g} "
+    name = greedy_name(table.spec.task)
+    text = (f"summary: best {point_label(best['values'])}, {name} {best['greedy_error']:.4g} "
             f"(sd {best['greedy_error_seed_sd']:.2g} over {best['seeds']} seed(s))")
     own_values = []
     for key in table.keys:
@@ -171,7 +172,7 @@ def summary_line(table: Table) -> str:
         text += " (the best)"
     else:
         change = best["greedy_error"] / own_point["greedy_error"] - 1.0 if own_point["greedy_error"] else math.nan
-        text += f", greedy error {own_point['greedy_error']:.4g} there (best {change:+.1%})"
+        text += f", {name} {own_point['greedy_error']:.4g} there (best {change:+.1%})"
     return f"{text}; {done}"
 
 

@@ -11,16 +11,25 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 
-from somarm import learners, run
+from somarm import learners, run, tasks
 from somarm.run.config import RunConfig
 from somarm.sweep.spec import SweepSpec, config_key
 
-__all__ = ["Chunk", "plan_chunks", "validate_points", "run_chunk", "point_label", "failed_row", "METRICS"]
+__all__ = ["Chunk", "plan_chunks", "validate_points", "run_chunk", "point_label", "failed_row", "METRICS",
+           "greedy_name"]
 
 #: The numbers of a result row; an error is minus the reward (the distance to the goal for the
-#: arms, the miss for throws). ``greedy`` is the policy on fresh observations, ``final`` training's
-#: last window; ``_sd`` is the spread over the seed's trials.
+#: arms, the miss for throws). ``greedy`` is the policy on fresh observations (``run.greedy_cost``:
+#: of an episodic task, minus the return of whole greedy episodes, so a sweep ranks it by return),
+#: ``final`` training's last window; ``_sd`` is the spread over the seed's trials.
 METRICS = ("greedy_error", "greedy_error_sd", "final_error", "final_error_sd")
+
+
+
+def greedy_name(task: str) -> str:
+    """What a row's ``greedy_error`` is for ``task``, in words (the summary line's and the figure's)."""
+    return "greedy cost (minus the episode return)" if tasks.record(task).episodic else "greedy error"
+
 
 #: The evaluation that ``somarm train`` writes into summary.json, so a sweep row equals a run.
 GREEDY_OBSERVATIONS = 1000
@@ -113,15 +122,16 @@ def _number(value: float | None) -> float:
 def _row(index: int, seed: int, result: run.RunResult) -> dict:
     """Result row of one trained point: the errors its run folder's summary.json would hold."""
     greedy = run.greedy_summary(result, GREEDY_OBSERVATIONS)
-    if "greedy_mean_reward" not in greedy:
+    if not greedy or "greedy_error" in greedy:
         raise ValueError(greedy.get("greedy_error", "no step was trained"))
+    greedy_error, greedy_error_sd = run.greedy_cost(greedy)
     summary = run.summary(result)
     return {
         "point": index,
         "seed": seed,
         "key": config_key(result.config),
-        "greedy_error": -greedy["greedy_mean_reward"],
-        "greedy_error_sd": greedy["greedy_sd_reward"],
+        "greedy_error": greedy_error,
+        "greedy_error_sd": greedy_error_sd,
         "final_error": -_number(summary["final_mean_reward"]),
         "final_error_sd": _number(summary["final_sd_reward"]),
         "steps": result.steps_done,

@@ -59,3 +59,34 @@ def test_centred_mean_does_not_lag():
     assert centred[9] == pytest.approx(0.6) and centred[10] == pytest.approx(0.4)
     np.testing.assert_allclose(centred[12:], 0.0)
     np.testing.assert_allclose(metrics.centred_mean(np.arange(5.0), 1), [0.5, 1, 2, 3, 3.5])
+
+
+def test_a_failed_trial_is_above_twice_the_median():
+    errors = np.array([0.010, 0.011, 0.012, 0.013, 0.0239, 0.0241, 0.268])  # median 0.013: threshold 0.026
+    np.testing.assert_array_equal(metrics.failed_trials(errors), [0, 0, 0, 0, 0, 0, 1])
+    # An absolute 0.05 would pass a trial at 4x the median of a run whose trials sit near 0.01 ...
+    assert not metrics.failed_trials(np.array([0.010, 0.010, 0.010, 0.045]))[:3].any()
+    assert metrics.failed_trials(np.array([0.010, 0.010, 0.010, 0.045]))[3]
+    # ... and fail every trial of a task whose errors are all larger: relative to the median, none fails.
+    assert not metrics.failed_trials(np.array([0.30, 0.32, 0.35, 0.31])).any()
+
+
+def test_failed_trials_threshold_is_strict_and_uses_the_median_not_the_mean():
+    errors = np.array([1.0, 1.0, 1.0, 2.0, 100.0])  # mean 21: a mean-based threshold would pass 100
+    np.testing.assert_array_equal(metrics.failed_trials(errors), [0, 0, 0, 0, 1])  # 2.0 is not above 2 x 1
+    np.testing.assert_array_equal(metrics.failed_trials(errors, factor=1.5), [0, 0, 0, 1, 1])
+
+
+@pytest.mark.parametrize("errors, factor", [([], 2.0), ([1.0, np.nan], 2.0), ([[1.0]], 2.0), ([1.0], 1.0)])
+def test_failed_trials_refuses_bad_input(errors, factor):
+    with pytest.raises(ValueError, match="errors|factor"):
+        metrics.failed_trials(np.array(errors), factor)
+
+
+def test_the_reports_count_failed_trials_by_the_one_definition():
+    from somarm.reproduce import beyond
+
+    errors = np.array([0.010, 0.011, 0.012, 0.013, 0.040])  # 0.040 is 3.3x the median: failed
+    said = beyond._outliers(errors)
+    assert "1 of 5 trials failed (above twice the median): trial 4" in said
+    assert "no trial failed" in beyond._outliers(np.array([0.010, 0.011, 0.012, 0.013, 0.023]))

@@ -116,6 +116,25 @@ def test_a_local_sweep_equals_separate_runs_bit_for_bit(tmp_path, capsys):
     assert command[:3] == ["somarm", "train", "reach2"] and f"alpha={best['values']['alpha']}" in command
 
 
+def test_a_sweep_of_an_episodic_task_ranks_by_the_greedy_return(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    argv = ["sweep", "reach2_obstacle", "--grid", "gamma=0,0.9", "--trials", "1", "--steps", "200", "--block", "50",
+            "--no-progress", "--out", str(out)]
+    assert cli.main(argv) == 0
+    said = capsys.readouterr().out
+    rows = read_csv(out / "results.csv")
+    assert "greedy cost (minus the episode return)" in said
+    run_out = tmp_path / "alone"  # the gamma 0 point, run alone through `somarm train`
+    assert cli.main(["train", "reach2_obstacle", "--set", "gamma=0", "--trials", "1", "--steps", "200",
+                     "--block", "50", "--no-progress", "--no-figures", "--out", str(run_out)]) == 0
+    alone = json.loads((run_out / "summary.json").read_text())
+    row = next(r for r in rows if float(r["gamma"]) == 0)
+    assert -float(row["greedy_error"]) == alone["greedy_mean_return"]
+    best = json.loads((out / "best.json").read_text())
+    highest = max(rows, key=lambda r: -float(r["greedy_error"]))  # the highest mean return
+    assert float(best["values"]["gamma"]) == float(highest["gamma"])
+
+
 def test_an_interrupted_sweep_keeps_its_rows_and_a_rerun_finishes_only_the_rest(tmp_path, monkeypatch):
     spec = SweepSpec(task="reach2", axes=(parse_grid("alpha=0.5,1"),), n_trials=2, n_steps=200, block=50,
                      n_seeds=3)
