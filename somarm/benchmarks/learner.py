@@ -86,7 +86,7 @@ def interpolated_rows(n_steps: int, repeats: int, *, n_trials: int = 100, late: 
     """Print the interpolated response's cost beside the winner's, measured in turns; returns the ratios.
 
     Both run at ``t0 = 0`` (mostly exploring steps) and at ``t0 = late`` (mostly greedy steps, where
-    the blend is computed), ``n_trials`` trials, best of ``repeats``; the issue's target is <= 2x.
+    the blend is computed), ``n_trials`` trials, best of ``repeats``; this project's target is <= 2x.
     """
     print(f"\ninterpolated response (somarm.learners.interpolation) against the winner's, {n_trials} trials")
     print(f"{'maps':36s} {'from t':>7s} {'winner us':>10s} {'interpolated us':>16s} {'ratio':>7s}")

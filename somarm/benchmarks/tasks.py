@@ -26,7 +26,7 @@ from somarm.validation import OneLineParser, check_int, whole_number
 
 __all__ = ["TARGETS", "measure", "main"]
 
-#: The issue's targets for batched MuJoCo evaluations per second on this 2-core machine.
+#: This project's targets for batched MuJoCo evaluations per second on a 2-core machine.
 TARGETS: dict[str, float] = {"reach2": 1e6, "reach20": 3e5, "throw": 5e4, "throw_distance": 5e4,
                              "throw_wind": 5e4, "throw_friction": 5e4, "throw_mass": 5e4}
 _SIZES = {"reach2": 400_000, "reach20": 100_000, "four_goals": 400_000}

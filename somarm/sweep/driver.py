@@ -39,9 +39,9 @@ def run_sweep(
     """Run every point of ``spec`` at every seed that ``out`` does not hold yet, then write the tables.
 
     The folder is claimed as a run folder is (``somarm.run.claim``): one sweep writes it at a time,
-    the same sweep run again goes on where it stopped, and a folder holding anything else (another
-    sweep, a run, a report) is refused unless ``force``, which replaces it once the new sweep's
-    tables are written.
+    the same sweep run again, or widened (more values or seeds), goes on where it stopped, and a
+    folder holding anything else (another sweep, a run, a report) is refused unless ``force``, which
+    replaces it once the new sweep's tables are written.
 
     Args:
       spec: the sweep (checked here).
@@ -76,8 +76,9 @@ def run_sweep(
     described = {**spec.to_dict(), "points": points}
     same = _holds(folder, described)
     if not same and not force and (folder / "sweep.json").is_file():
-        raise ValueError(f"--out {folder} holds another sweep (its sweep.json differs); give --force to replace "
-                         "it, or another --out (the same sweep run again goes on where it stopped)")
+        raise ValueError(f"--out {folder} holds another sweep (its settings or swept keys differ); give --force to "
+                         "replace it, or another --out (the same sweep, or one with more values or seeds, goes on "
+                         "where it stopped)")
     owner = claim(folder, force=force, resume=same, what="a sweep")
     try:
         outcome = _sweep_into(owner.path, spec, points, described, engine=engine, workers=workers,
@@ -92,11 +93,20 @@ def run_sweep(
     return outcome
 
 
+#: What may change between two runs of one sweep in one folder: the values swept and the seeds (a
+#: widened sweep runs only its new rows; the folder's tables then show the sweep as run last).
+_WIDENING = ("axes", "n_samples", "seed", "n_seeds", "sample_seed")
+
+
 def _holds(folder: Path, described: dict) -> bool:
-    """Whether ``folder`` holds this very sweep (its ``sweep.json``), so that running it again resumes."""
+    """Whether ``folder`` holds this sweep or a narrower one of the same settings and swept keys (its
+    ``sweep.json``), so that running it resumes in place."""
     try:
-        return json.loads((folder / "sweep.json").read_text()) == json.loads(json.dumps(described))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+        held = json.loads((folder / "sweep.json").read_text())
+        ours = json.loads(json.dumps(described))
+        same_keys = [a["key"] for a in held["axes"]] == [a["key"] for a in ours["axes"]]
+        return same_keys and all(held.get(k) == v for k, v in ours.items() if k not in (*_WIDENING, "points"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError, KeyError, TypeError):
         return False
 
 

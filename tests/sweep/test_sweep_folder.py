@@ -27,20 +27,20 @@ def _error(capsys) -> str:
 
 def test_another_sweep_is_refused_without_force_and_replaces_the_first_with_it(tmp_path, capsys):
     out = tmp_path / "sweep"
-    assert _sweep(out, "alpha=0.5,1") == 0
+    assert _sweep(out, "lambda_a=0.5,1") == 0
     first = (out / "results.csv").read_text()
     (out / "notes.txt").write_text("mine")
     capsys.readouterr()
-    assert _sweep(out, "alpha=0.2,0.3") == 2
+    assert _sweep(out, "alpha=0.2,0.3") == 2  # another swept key: another sweep
     assert "holds another sweep" in _error(capsys) and (out / "results.csv").read_text() == first
-    assert _sweep(out, "alpha=0.5,1") == 0  # the same sweep again: resumed, nothing to run
+    assert _sweep(out, "lambda_a=0.5,1") == 0  # the same sweep again: resumed, nothing to run
     assert (out / "results.csv").read_text() == first
     capsys.readouterr()
     assert _sweep(out, "alpha=0.2,0.3", "--force") == 0
     # The preset's alpha=1 is not among the swept values: said so, not that alpha was not swept.
     assert "preset table1 has alpha=1 (best x0.3) (a point this sweep did not run)" in capsys.readouterr().out
     rows = (out / "results.csv").read_text()
-    assert "0.2" in rows and "0.5" not in rows.split("\n", 1)[1]
+    assert "0.2" in rows and "lambda_a" not in rows.split("\n", 1)[0]
     assert (out / "notes.txt").read_text() == "mine"
     assert json.loads((out / "sweep.json").read_text())["points"] == [{"alpha": "0.2"}, {"alpha": "0.3"}]
 
@@ -79,8 +79,8 @@ def test_two_sweeps_started_at_once_leave_one_sweeps_results(tmp_path):
                "--steps", "2000", "--no-progress", "--no-figures"]
     first = subprocess.Popen([*command, "--grid", "alpha=0.5,1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              text=True)
-    second = subprocess.Popen([*command, "--grid", "alpha=0.2,0.3"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True)
+    second = subprocess.Popen([*command, "--grid", "lambda_a=0.2,0.3"], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True)
     results = [(p.wait(timeout=300), p.stderr.read()) for p in (first, second)]
     codes = sorted(code for code, _ in results)
     assert codes == [0, 2], results
@@ -88,9 +88,20 @@ def test_two_sweeps_started_at_once_leave_one_sweeps_results(tmp_path):
     assert len(refused) == 1 and ("being written by another" in refused[0] or "holds another sweep" in refused[0])
     won = next(i for i, (code, _) in enumerate(results) if code == 0)
     points = json.loads((out / "sweep.json").read_text())["points"]
-    assert points == ([{"alpha": "0.5"}, {"alpha": "1"}], [{"alpha": "0.2"}, {"alpha": "0.3"}])[won]
+    assert points == ([{"alpha": "0.5"}, {"alpha": "1"}], [{"lambda_a": "0.2"}, {"lambda_a": "0.3"}])[won]
 
 
 @pytest.fixture(autouse=True)
 def _no_display(monkeypatch):
     monkeypatch.setenv("MUJOCO_GL", "disable")
+
+
+def test_a_widened_sweep_resumes_in_place_and_runs_only_its_new_rows(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    assert _sweep(out, "alpha=0.5,1") == 0
+    first = {p.name: p.read_bytes() for p in (out / "points").iterdir()}
+    capsys.readouterr()
+    assert _sweep(out, "alpha=0.5,1,0.7", "--seeds", "2") == 0
+    assert "6 of 6 runs done" in capsys.readouterr().out
+    points = {p.name: p.read_bytes() for p in (out / "points").iterdir()}
+    assert len(points) == 6 and all(points[name] == data for name, data in first.items())  # not run again

@@ -19,7 +19,7 @@ def _greedy(gamma: float) -> dict[str, np.ndarray]:
 
 @pytest.mark.slow
 def test_gamma_09_reaches_the_goal_in_90_percent_of_greedy_episodes_and_gamma_0_in_few():
-    # Bound: the target (>= 90% from the start distribution) after 12,000 steps (a little over
+    # Bound: this project's target (>= 90% from the start distribution) after 12,000 steps (a little over
     # half the preset's run); the shortest path takes 4 steps, so greedy episodes may take at most 10.
     discounted = _greedy(0.9)
     assert (discounted["success_rate"] >= 0.9).all(), discounted
