@@ -107,10 +107,10 @@ def _train_into(out: Path, group, args, owner) -> int:
                 print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
             _write_run(result, owner, figures=not args.no_figures, extra_summary=extra)
     except KeyboardInterrupt:
-        print(f"interrupted after step {result.steps_done}: results written to {out}", file=sys.stderr)
+        print(f"interrupted after step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
         return 130
     if result.interrupted:
-        print(f"interrupted at step {result.steps_done}: partial results written to {out}", file=sys.stderr)
+        print(f"interrupted at step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
         return 130
     if "greedy_mean_return" in extra:  # an episodic task: whole greedy episodes, not one step
         greedy = f"greedy mean return {extra['greedy_mean_return']:+.4f}"
@@ -122,19 +122,24 @@ def _train_into(out: Path, group, args, owner) -> int:
 
 
 def _write_run(result, owner, **kwargs) -> None:
-    """Write a run into its claimed folder and make it the folder's run; a failed write of a forced run
-    keeps the earlier run (the new files are dropped), of a first run keeps what was written."""
+    """Write a run into its claimed folder and make it the folder's run, unless it is incomplete (a
+    failed write, or an interrupted run) and would replace an earlier run, which is then kept whole."""
     from somarm import run
 
     try:
         run.write(result, owner.path, **kwargs)
     except ValueError as exc:
-        staged = owner.staged
         owner.finish(False)
-        if staged:
+        if owner.replacing:
             raise ValueError(f"{exc}; the new run was dropped and the earlier run in {owner.folder} is kept") from None
         raise
-    owner.commit()
+    owner.finish(not result.interrupted)
+
+
+def _what_was_kept(result, owner, out: Path) -> str:
+    if owner.replacing:
+        return f"the earlier run in {out} is kept (an interrupted run does not replace it)"
+    return f"partial results written to {out}"
 
 
 def _cmd_evaluate(args) -> int:
@@ -188,10 +193,14 @@ def _cmd_reproduce(args) -> int:
         status = runner.reproduce(owner.path, quick=args.quick, only=args.only, progress=not args.no_progress,
                                   seeds=args.seeds, seed=args.seed, backend=args.backend, jobs=args.jobs,
                                   final_out=owner.folder)
-        owner.commit()  # a finished report, or the part an interrupted run wrote
+        owner.finish(status == 0)  # a finished report; an interrupted one only where there was none
+        if status != 0 and owner.replacing:
+            print(f"the earlier report in {out} is kept (an interrupted run does not replace it)", file=sys.stderr)
         return status
-    except ValueError:  # a file could not be written: the report says which experiments it keeps
-        owner.commit()
+    except ValueError as exc:  # a file could not be written: the report so far, where there was none
+        owner.finish(False)
+        if owner.replacing:
+            raise ValueError(f"{exc}; the new report was dropped and the earlier one in {out} is kept") from None
         raise
     except BaseException:
         owner.finish(False)
@@ -316,6 +325,18 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Commands whose output on stdout is their result: one that cannot be written is an error.
+_OUTPUT_COMMANDS = ("tasks", "presets", "evaluate")
+
+
+def _output_lost() -> bool:
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        pass
+    return bool(getattr(sys.stdout, "dropped", False))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``somarm`` console script; errors end in one line and exit code 2."""
     # The command line never renders through MuJoCo (the viewer is meshcat), so no MUJOCO_GL of the
@@ -330,9 +351,16 @@ def main(argv: list[str] | None = None) -> int:
         if argv[:1] == ["view"]:
             return _cmd_forward("somarm.viewer.cli", argv[1:])
         args = _parser().parse_args(argv)
-        return args.func(args)
+        status = args.func(args)
+        if args.command in _OUTPUT_COMMANDS and _output_lost():  # their output is what they are for
+            raise ValueError(f"cannot write the output to stdout: {sys.stdout.reason}")
+        return status
     except ValueError as exc:
         print(f"somarm: error: {exc}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("somarm: error: out of memory (more than this machine or `ulimit -v` allows); give fewer "
+              "trials, observations or seeds, or smaller maps", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("somarm: interrupted", file=sys.stderr)

@@ -27,23 +27,26 @@ class GuardedStream:
     def __init__(self, stream: TextIO) -> None:
         self._stream = stream
         self.dropped = False  #: True once a write failed: from then on the stream writes to /dev/null
+        self.reason = ""  #: why the first write failed (``No space left on device``, ``Broken pipe``)
 
     def write(self, text: str) -> int:
         try:
             return self._stream.write(text)
-        except (OSError, ValueError):  # EPIPE, ENOSPC, EBADF; ValueError: written after close
-            self._drop()
+        except (OSError, ValueError) as exc:  # EPIPE, ENOSPC, EBADF; ValueError: written after close
+            self._drop(exc)
             return len(text)
 
     def flush(self) -> None:
         try:
             self._stream.flush()
-        except (OSError, ValueError):
-            self._drop()
+        except (OSError, ValueError) as exc:
+            self._drop(exc)
 
-    def _drop(self) -> None:
+    def _drop(self, exc: BaseException | None = None) -> None:
         """Point the descriptor at /dev/null and flush what is buffered there."""
         self.dropped = True
+        if exc is not None and not self.reason:
+            self.reason = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
         try:
             fd = self._stream.fileno()
             null = os.open(os.devnull, os.O_WRONLY)
@@ -61,5 +64,7 @@ def guard_standard_streams() -> None:
     """Wrap ``sys.stdout`` and ``sys.stderr`` in ``GuardedStream`` (once; a no-op when already guarded)."""
     for name in ("stdout", "stderr"):
         stream = getattr(sys, name)
-        if stream is not None and not isinstance(stream, GuardedStream):
+        if stream is None:  # started with the descriptor closed (`2>&-`): what would go there is dropped
+            stream = open(os.devnull, "w")  # noqa: SIM115 - lives as long as the process
+        if not isinstance(stream, GuardedStream):
             setattr(sys, name, GuardedStream(stream))

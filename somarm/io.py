@@ -28,6 +28,11 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
         stands at ``path`` (one clear line naming ``path``).
     """
     path = Path(path)
+    if path.is_symlink():  # write through a link to the file it names, not over the link
+        path = Path(os.path.realpath(path))
+    if path.exists() and not path.is_file() and not path.is_dir():
+        raise ValueError(f"cannot write {path}: it is not a regular file (a device, a pipe or a socket); "
+                         "give a file name")
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise ValueError(f"cannot write {path}: folder {folder} does not exist")

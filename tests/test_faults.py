@@ -463,3 +463,36 @@ def test_a_sweep_point_that_cannot_fit_is_refused_and_its_folder_not_made(tmp_pa
                   "--out", str(out))
     one_error_line(done, "sweep point input_shape=2000x2000: a somq learner", "of memory, more than the")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("kind", ["U", "complex"])
+def test_a_learned_state_of_text_or_complex_numbers_is_a_damaged_file(run_folder, tmp_path, kind):
+    bad = _copy_run(run_folder, tmp_path / kind)
+    with np.load(run_folder / "learner.npz", allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files}
+    arrays["q"] = arrays["q"].astype(str) if kind == "U" else arrays["q"] + 1j
+    np.savez_compressed(bad / "learner.npz", **arrays)
+    one_error_line(somarm("evaluate", str(bad)), str(bad / "learner.npz"), "q must hold real numbers")
+
+
+def test_stdout_closed_or_full_for_a_command_whose_output_is_its_result_is_one_line(tmp_path):
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-m", "somarm.cli", "tasks"], stdout=full, stderr=subprocess.PIPE,
+                              text=True, env=ENV, timeout=60)
+    one_error_line(done, "cannot write the output to stdout: No space left on device")
+    done = subprocess.run([sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "100", "--out",
+                           str(tmp_path / "run")], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=ENV,
+                          timeout=120, text=True, pass_fds=(), close_fds=True, preexec_fn=lambda: os.close(2))
+    assert done.returncode == 0 and (tmp_path / "run" / "summary.json").is_file()
+
+
+def test_out_of_memory_anywhere_is_one_line(tmp_path):
+    import resource
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (1_500_000 * 1024, resource.RLIM_INFINITY))
+
+    done = subprocess.run([sys.executable, "-m", "somarm.cli", "bench", "learner", "--quick", "--trials", "99999999"],
+                          capture_output=True, text=True, env=ENV, timeout=120, preexec_fn=limited)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr

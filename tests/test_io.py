@@ -1,9 +1,12 @@
 import json
+import os
+import stat
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from somarm.io import atomic_save_npz, atomic_write_json, atomic_write_text
+from somarm.io import atomic_save_npz, atomic_write_bytes, atomic_write_json, atomic_write_text
 
 
 def test_atomic_writes_round_trip(tmp_path):
@@ -42,3 +45,21 @@ def test_written_files_get_the_usual_mode(tmp_path):
     finally:
         os.umask(old)
     assert (tmp_path / "e.txt").stat().st_mode & 0o777 == 0o644
+
+
+def test_a_device_or_a_pipe_is_refused_and_left_as_it_is(tmp_path):
+    pipe = tmp_path / "pipe"
+    os.mkfifo(pipe)
+    for path in (pipe, Path("/dev/full"), Path("/dev/null")):
+        with pytest.raises(ValueError, match="is not a regular file"):
+            atomic_write_bytes(path, b"x")
+    assert stat.S_ISFIFO(pipe.stat().st_mode) and stat.S_ISCHR(os.stat("/dev/full").st_mode)
+
+
+def test_a_link_is_written_through_to_its_file(tmp_path):
+    target = tmp_path / "real.html"
+    target.write_text("old")
+    link = tmp_path / "link.html"
+    link.symlink_to(target)
+    atomic_write_bytes(link, b"new")
+    assert link.is_symlink() and target.read_text() == "new"

@@ -130,6 +130,11 @@ def _restore(cls: type, meta: dict[str, Any], arrays: dict[str, np.ndarray], pat
         target = getattr(learner, name)
         if arrays[name].shape != target.shape:
             raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")
+        allowed = "iu" if target.dtype.kind in "iu" else "fiu"
+        if arrays[name].dtype.kind not in allowed:
+            what = "whole numbers" if allowed == "iu" else "real numbers"
+            raise ValueError(f"{path} is a damaged learner file: {name} must hold {what}, "
+                             f"got {arrays[name].dtype}")
         if name in cls._STATE_ARRAYS and arrays[name].dtype.kind == "f" and not np.isfinite(arrays[name]).all():
             raise ValueError(f"{path} is a damaged learner file: {name} holds NaN or infinite values "
                              "(a learned state is finite)")

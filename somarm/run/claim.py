@@ -5,12 +5,14 @@ when the process ends, even by SIGKILL), so a second writer is refused at once i
 its files with the first one's. A folder that already holds files is refused unless ``force``.
 
 What a run wrote is listed in the folder's manifest (``.somarm-manifest.json``), and nothing
-else is ever removed: a user's own files in the folder stay. A forced run writes into a staging
-folder inside it (``.somarm-new``) and ``commit`` swaps the new files in at the end: the earlier
-run's files (those its manifest lists) are moved aside, the new ones moved in, and the new
-manifest put in place, which is the moment the new run becomes the folder's run. A process killed
-before that moment leaves the earlier run as it was; the next ``claim`` finds the leftovers and
-finishes or undoes the swap.
+else is ever removed or overwritten: a user's own files in the folder stay. A run writes into a
+staging folder inside it (``.somarm-new``), so everything there is the run's own, and ``commit``
+swaps the new files in at the end: the earlier run's files (those its manifest lists) are moved
+aside, the new ones moved in, and the new manifest put in place, which is the moment the new run
+becomes the folder's run. A process killed before that moment leaves the earlier run as it was;
+the next ``claim`` finds the leftovers and finishes or undoes the swap. New results that would
+overwrite a file somarm did not write are kept in a folder of their own instead. A sweep run again
+(``resume``) goes on in place.
 """
 
 from __future__ import annotations
@@ -76,7 +78,8 @@ def _recover(folder: Path) -> None:
     if aside.is_dir():
         if (staging / MANIFEST_NAME).is_file():  # the new manifest never moved in: undo
             for name in _listed(staging):
-                (folder / name).unlink(missing_ok=True)
+                if not (staging / name).exists():  # moved in already: take it out again
+                    (folder / name).unlink(missing_ok=True)
             for name in _files_under(aside):
                 _move(aside / name, folder / name)
         shutil.rmtree(aside)
@@ -91,12 +94,14 @@ class FolderClaim:
     Attributes:
       folder: the folder.
       created: True if ``claim`` made it (so a caller that gives up can remove it again).
-      staged: True if the results go to a staging folder first (a forced run over earlier results).
+      staged: True while the results go to the staging folder (every run but a resumed one).
+      replacing: True if the folder held earlier results, which complete new ones replace.
     """
 
     folder: Path
     created: bool
     staged: bool = False
+    replacing: bool = False
     _fd: int | None = None
     _before: frozenset[str] = frozenset()  #: files already there when a run resumed in place
 
@@ -125,11 +130,25 @@ class FolderClaim:
             return
         staging, aside = self.path, self.folder / _ASIDE
         new = _files_under(staging)
+        listed = set(_listed(self.folder))
+        theirs = [f for f in new if (self.folder / f).exists() and f not in listed]
+        if theirs:
+            self._set_aside_results(theirs)
         try:
             _write_manifest(staging / MANIFEST_NAME, new)
-            # The earlier run's files, and any file of the same name as a new one (written by an
-            # older somarm, which kept no manifest): moved aside, so that a failed swap can undo.
-            old = sorted({f for f in _listed(self.folder) + new if (self.folder / f).is_file()})
+        except OSError as exc:  # a full disk: renames need no room, a manifest does
+            (staging / (MANIFEST_NAME + ".tmp")).unlink(missing_ok=True)
+            if self.replacing:
+                self.discard()
+                raise ValueError(f"cannot put the new results in {self.folder}: {exc.strerror or exc}; "
+                                 "the earlier results are kept") from None
+            for name in new:  # unlisted, they are never removed by a later run, only kept beside
+                _move(staging / name, self.folder / name)
+            shutil.rmtree(staging, ignore_errors=True)
+            self.staged = False
+            return
+        try:
+            old = sorted(f for f in listed if (self.folder / f).is_file())  # moved aside, so a failed swap can undo
             for name in old:
                 _move(self.folder / name, aside / name)
             for name in new:
@@ -144,15 +163,25 @@ class FolderClaim:
         _prune_empty(self.folder, [f for f in old if f not in new])
         self.staged = False
 
+    def _set_aside_results(self, theirs: list[str]) -> None:
+        """Keep new results that would overwrite files somarm did not write in a folder of their own."""
+        kept = self.folder / f"somarm-results-{os.getpid()}"
+        os.replace(self.path, kept)
+        self.staged = False
+        shown = ", ".join(theirs[:3]) + (", ..." if len(theirs) > 3 else "")
+        raise ValueError(f"{self.folder} holds {shown}, which somarm did not write there (its manifest does not list "
+                         f"them), so the new results were not put beside them: they are in {kept}; move those "
+                         "files away and run again, or give another folder")
+
     def discard(self) -> None:
         """Drop what a staged run wrote (the earlier results stay); nothing to do for an unstaged one."""
         if self.staged:
             shutil.rmtree(self.path, ignore_errors=True)
 
     def finish(self, complete: bool) -> None:
-        """``commit`` complete results; of incomplete ones, keep the earlier run if there is one
-        (``discard``), else list what was written, so that a later forced run may replace it."""
-        if complete or not self.staged:
+        """``commit`` complete results, or incomplete ones where there is no earlier run; keep the
+        earlier run whole rather than replace it with incomplete ones (``discard``)."""
+        if complete or not self.replacing:
             self.commit()
         else:
             self.discard()
@@ -164,6 +193,7 @@ class FolderClaim:
             self._fd = None
         if remove_if_unused and self.created:
             try:
+                self.discard()
                 (self.folder / LOCK_NAME).unlink(missing_ok=True)
                 self.folder.rmdir()
             except OSError:  # something else was put there meanwhile: leave it
@@ -192,10 +222,12 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
     if folder.exists() and not folder.is_dir():
         raise ValueError(f"{flag} {folder} is a file; give a folder (new, or holding {what})")
     created = not folder.exists()
+    had_lock = (folder / LOCK_NAME).exists()
     try:
         folder.mkdir(parents=True, exist_ok=True)
         fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError as exc:
+        _leave_as_found(folder, created, had_lock)
         raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -217,13 +249,26 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
             shown = ", ".join(existing[:4]) + (", ..." if len(existing) > 4 else "")
             raise ValueError(f"{flag} {folder} is not empty ({shown}); give --force to replace {what} "
                              f"there, or another {flag}")
-        if existing:
-            held.staged = True
-            held.path.mkdir()  # the new results wait here until commit
+        held.replacing = bool(existing)
+        held.staged = True
+        held.path.mkdir()  # the new results wait here until commit: only what is there is listed as somarm's
     except OSError as exc:
         held.release()
+        _leave_as_found(folder, created, had_lock)
         raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
     except ValueError:
         held.release()
+        _leave_as_found(folder, created, had_lock)
         raise
     return held
+
+
+def _leave_as_found(folder: Path, created: bool, had_lock: bool) -> None:
+    """After a refusal: no lock file left in a folder that had none, and no folder that was not there."""
+    try:
+        if not had_lock:
+            (folder / LOCK_NAME).unlink(missing_ok=True)
+        if created:
+            folder.rmdir()
+    except OSError:  # another process holds it, or something else is there now: leave it
+        pass

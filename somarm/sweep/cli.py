@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from somarm.validation import number, whole_number
 
@@ -41,10 +42,11 @@ def main(args: argparse.Namespace) -> int:
     from somarm import run
     from somarm.run.stopping import sigterm_as_interrupt
     from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
-    from somarm.validation import check_int
+    from somarm.validation import check_int, check_number
 
     if args.workers is not None:
         check_int("--workers", args.workers)
+    check_number("--max-group-mb", args.max_group_mb, minimum=0.0, strict_minimum=True)
     axes = tuple(parse_grid(g) for g in args.grid) + tuple(parse_random(r) for r in args.random)
     spec = SweepSpec.around(run.from_options(args), axes, n_seeds=args.seeds, n_samples=args.samples,
                             sample_seed=args.sample_seed)
@@ -57,5 +59,11 @@ def main(args: argparse.Namespace) -> int:
     if outcome.interrupted:
         print(f"interrupted: partial results in {out}; rerun the same command to finish", file=sys.stderr)
         return 130
-    print(f"results in {out}: results.csv, best.json" + ("" if args.no_figures else ", sweep.png"))
+    finished = [row for row in outcome.table.rows if not row.get("error")]
+    if not finished:
+        first = outcome.table.rows[0].get("error", "") if outcome.table.rows else ""
+        raise ValueError(f"no point of the sweep finished (the first failed with: {first}); "
+                         f"results.csv in {out} lists each point's error")
+    written = [name for name in ("results.csv", "best.json", "sweep.png") if (Path(out) / name).is_file()]
+    print(f"results in {out}: {', '.join(written)}")
     return 0

@@ -87,7 +87,7 @@ def run_sweep(
         owner.finish(False)
         raise
     else:
-        owner.commit()
+        owner.finish(not outcome.interrupted)  # an interrupted sweep does not replace another one
     finally:
         owner.release()
     return outcome

@@ -16,7 +16,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from somarm.validation import number, whole_number
+from somarm.validation import OneLineParser, number, whole_number
 
 __all__ = ["main", "build_parser"]
 
@@ -25,16 +25,9 @@ __all__ = ["main", "build_parser"]
 MAX_GOALS = 200
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse that reports a usage error as ``somarm: error: ...`` in one line, as ``somarm`` does."""
-
-    def error(self, message: str):  # noqa: D401 - argparse's signature
-        raise ValueError(message)
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The ``somarm view`` argument parser."""
-    parser = _Parser(prog="somarm view", description=__doc__.split("\n")[0],
+    parser = OneLineParser(prog="somarm view", description=__doc__.split("\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog="\n".join(__doc__.split("\n")[2:]))
     parser.add_argument("task", help="task name (reach2, four_goals, reach20, throw, throw_distance, ...)")

@@ -25,13 +25,13 @@ def _listing(folder: Path) -> dict[str, str]:
 
 def _first_run(folder: Path, files: dict[str, str]) -> None:
     owner = claim(folder)
-    assert not owner.staged and owner.path == folder
+    assert owner.staged and not owner.replacing and owner.path != folder
     _write(owner.path, files)
     owner.commit()
     owner.release()
 
 
-def test_a_first_run_writes_in_place_and_lists_what_it_wrote(tmp_path):
+def test_a_first_run_is_staged_then_moved_in_and_lists_what_it_wrote(tmp_path):
     out = tmp_path / "run"
     _first_run(out, {"config.json": "old", "figures/a.png": "A"})
     assert json.loads((out / MANIFEST_NAME).read_text())["files"] == ["config.json", "figures/a.png"]
@@ -42,7 +42,7 @@ def test_a_forced_run_replaces_only_what_the_earlier_run_wrote(tmp_path):
     _first_run(out, {"config.json": "old", "old.png": "O", "figures/a.png": "A"})
     _write(out, {"photo.png": "mine", "figures/notes.txt": "mine too"})
     owner = claim(out, force=True)
-    assert owner.staged and owner.path != out
+    assert owner.staged and owner.replacing and owner.path != out
     _write(owner.path, {"config.json": "new", "new.png": "N"})
     assert _listing(out)["config.json"] == "old"  # nothing changes before commit
     owner.commit()
@@ -115,3 +115,73 @@ def test_a_resumed_run_lists_its_own_files_not_a_users_file_added_between(tmp_pa
     owner.commit()
     owner.release()
     assert json.loads((out / MANIFEST_NAME).read_text())["files"] == ["points/b.json", "results.csv"]
+
+
+def test_a_swap_killed_midway_after_some_earlier_files_moved_aside_restores_them_all(tmp_path, monkeypatch):
+    out = tmp_path / "run"
+    _first_run(out, {"a.json": "A", "b.json": "B", "c.json": "C"})
+    owner = claim(out, force=True)
+    _write(owner.path, {"a.json": "a2", "b.json": "b2", "c.json": "c2"})
+    real_replace, moves = os.replace, []
+
+    def dies_at_the_second_move(src, dst):
+        if ".somarm-old" in str(dst):
+            moves.append(dst)
+            if len(moves) == 2:
+                raise KeyboardInterrupt  # killed with one earlier file aside and two still in place
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(claim_module.os, "replace", dies_at_the_second_move)
+    with pytest.raises(KeyboardInterrupt):
+        owner.commit()
+    monkeypatch.setattr(claim_module.os, "replace", real_replace)
+    owner.release()
+    claim(out, force=True).release()
+    assert _listing(out) == {"a.json": "A", "b.json": "B", "c.json": "C"}
+
+
+def test_new_results_never_overwrite_a_file_somarm_did_not_write(tmp_path):
+    out = tmp_path / "run"
+    _first_run(out, {"config.json": "old"})
+    _write(out, {"learning_curve.png": "my own picture"})
+    owner = claim(out, force=True)
+    _write(owner.path, {"config.json": "new", "learning_curve.png": "a figure"})
+    with pytest.raises(ValueError, match="learning_curve.png, which somarm did not write there .* they are in"):
+        owner.commit()
+    owner.release()
+    assert _listing(out)["learning_curve.png"] == "my own picture" and _listing(out)["config.json"] == "old"
+    kept = next(p for p in out.iterdir() if p.name.startswith("somarm-results-"))
+    assert (kept / "learning_curve.png").read_text() == "a figure"
+
+
+def test_an_incomplete_run_does_not_replace_an_earlier_one_but_stands_where_there_was_none(tmp_path):
+    out = tmp_path / "run"
+    _first_run(out, {"config.json": "old"})
+    owner = claim(out, force=True)
+    _write(owner.path, {"config.json": "partial"})
+    owner.finish(False)
+    owner.release()
+    assert _listing(out) == {"config.json": "old"}
+    fresh = claim(tmp_path / "fresh")
+    _write(fresh.path, {"config.json": "partial"})
+    fresh.finish(False)
+    fresh.release()
+    assert _listing(tmp_path / "fresh") == {"config.json": "partial"}
+
+
+def test_a_file_added_during_a_run_is_not_listed_as_the_runs(tmp_path):
+    out = tmp_path / "run"
+    owner = claim(out)
+    _write(owner.path, {"config.json": "1"})
+    _write(out, {"my.txt": "added while the run went on"})
+    owner.commit()
+    owner.release()
+    assert json.loads((out / MANIFEST_NAME).read_text())["files"] == ["config.json"]
+
+
+def test_a_refused_folder_is_left_as_it_was_found(tmp_path):
+    mine = tmp_path / "mine"
+    _write(mine, {"notes.txt": "x"})
+    with pytest.raises(ValueError, match="is not empty"):
+        claim(mine)
+    assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]

@@ -105,3 +105,22 @@ def test_a_widened_sweep_resumes_in_place_and_runs_only_its_new_rows(tmp_path, c
     assert "6 of 6 runs done" in capsys.readouterr().out
     points = {p.name: p.read_bytes() for p in (out / "points").iterdir()}
     assert len(points) == 6 and all(points[name] == data for name, data in first.items())  # not run again
+
+
+def test_a_sweep_in_which_no_point_finished_fails_in_one_line(tmp_path, capsys, monkeypatch):
+    from somarm.run import group
+
+    def broken(config, task):
+        raise FloatingPointError("the learner diverged")
+
+    monkeypatch.setattr(group, "make_learner", broken)
+    out = tmp_path / "sweep"
+    assert _sweep(out, "alpha=0.5,1") == 2
+    assert "no point of the sweep finished (the first failed with: FloatingPointError" in _error(capsys)
+    assert (out / "results.csv").is_file()  # each point's error is listed there
+
+
+@pytest.mark.parametrize("size", ["nan", "inf", "0", "-5"])
+def test_a_group_size_that_is_not_a_positive_number_is_refused(tmp_path, capsys, size):
+    assert _sweep(tmp_path / "sweep", "alpha=0.5,1", "--max-group-mb", size) == 2
+    assert "--max-group-mb must be" in _error(capsys)
