@@ -130,9 +130,9 @@ def _restore(cls: type, meta: dict[str, Any], arrays: dict[str, np.ndarray], pat
         target = getattr(learner, name)
         if arrays[name].shape != target.shape:
             raise ValueError(f"{path}: {name} has shape {arrays[name].shape}, expected {target.shape}")
-        allowed = "iu" if target.dtype.kind in "iu" else "fiu"
+        allowed = {"b": "b", "i": "iu", "u": "iu", "f": "fiu"}.get(target.dtype.kind, arrays[name].dtype.kind)
         if arrays[name].dtype.kind not in allowed:
-            what = "whole numbers" if allowed == "iu" else "real numbers"
+            what = {"b": "true or false", "iu": "whole numbers"}.get(allowed, "real numbers")
             raise ValueError(f"{path} is a damaged learner file: {name} must hold {what}, "
                              f"got {arrays[name].dtype}")
         if name in cls._STATE_ARRAYS and arrays[name].dtype.kind == "f" and not np.isfinite(arrays[name]).all():
