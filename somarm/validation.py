@@ -6,6 +6,7 @@ import argparse
 import math
 import os
 import re
+import sys
 
 import numpy as np
 
@@ -38,6 +39,25 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str):  # noqa: D401 - argparse's signature
         raise ValueError(message)
+
+    def parse_known_args(self, args=None, namespace=None):
+        argv = list(sys.argv[1:] if args is None else args)
+        self._refuse_repeats(argv)
+        return super().parse_known_args(argv, namespace)
+
+    def _refuse_repeats(self, argv: list[str]) -> None:
+        """An option that takes one value, given twice, is refused (the last would win silently)."""
+        single = {flag: action.dest for action in self._actions if type(action) is argparse._StoreAction
+                  for flag in action.option_strings}
+        seen: set[str] = set()
+        for item in argv:
+            if item == "--":
+                break
+            flag = item.split("=", 1)[0]
+            if flag in single:
+                if single[flag] in seen:
+                    raise ValueError(f"{flag} is given twice; give it once")
+                seen.add(single[flag])
 
 
 #: Numbers as a user writes them: ASCII digits, no digit-group underscores (Python's int() and float()

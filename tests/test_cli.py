@@ -268,3 +268,36 @@ def test_reproduce_and_compare_take_a_first_seed(tmp_path):
     assert main(["compare", "reach2", "--learners", "somq", "--samples", "100", "--seeds", "2", "--seed", "4",
                  "--observations", "50", "--no-progress", "--out", str(tmp_path / "c")]) == 0
     assert json.loads((tmp_path / "c" / "compare.json").read_text())["seeds"] == [4, 5]
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["train", "reach2", "--steps", "100", "--steps", "200"], "--steps is given twice; give it once"),
+    (["sweep", "reach2", "--grid", "alpha=0.5,1", "--seeds", "2", "--seeds=3"], "--seeds is given twice"),
+    (["train", "throw", "--task-set", "punish_low=maybe"], "punish_low of throw takes true or false, got the text"),
+    (["train", "four_goals", "--task-set", "goals_before=x"], "goals_before of four_goals takes a JSON list"),
+])
+def test_a_value_given_twice_or_in_the_wrong_form_is_named_with_what_is_allowed(argv, needle, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0], err
+
+
+def test_evaluate_of_a_folder_being_written_names_the_writer(tmp_path, capsys):
+    from somarm.run.claim import claim
+
+    held = claim(tmp_path / "run")
+    try:
+        assert main(["evaluate", str(tmp_path / "run")]) == 2
+        err = capsys.readouterr().err
+        assert f"is being written by a somarm process (pid {os.getpid()})" in err, err
+    finally:
+        held.release()
+
+
+@pytest.mark.parametrize("field, value", [("overrides", [("epsilon", 0.2)]), ("task_params", None),
+                                          ("task_params", "radius=0.2"), ("trial_ids", 5)])
+def test_the_python_api_refuses_a_setting_of_the_wrong_type_in_one_line(field, value):
+    from somarm import run
+
+    with pytest.raises(ValueError, match=f"^{field} must be a"):
+        run.RunConfig(task="reach2", **{field: value}).resolved()

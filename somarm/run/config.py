@@ -96,6 +96,12 @@ class RunConfig:
         from somarm import tasks
         from somarm.learners import presets
 
+        for name in ("overrides", "task_params"):
+            if not isinstance(getattr(self, name), dict):
+                raise ValueError(f"{name} must be a dict of setting -> value, got {type(getattr(self, name)).__name__}")
+        ids = self.trial_ids
+        if ids is not None and (isinstance(ids, (str, bytes)) or not hasattr(ids, "__iter__")):
+            raise ValueError(f"trial_ids must be a list of whole numbers or None, got {type(ids).__name__}")
         record = tasks.record(self.task)
         config_type = _config_class(self.learner)
         tasks.check_backend(self.task, self.backend)
@@ -123,7 +129,7 @@ class RunConfig:
         check_int("--seed", resolved.seed, minimum=0)
         check_int("--block", resolved.block)
         _check_blocks(resolved.n_steps, resolved.block)
-        for trial_id in resolved.trial_ids or []:
+        for trial_id in [] if resolved.trial_ids is None else list(resolved.trial_ids):
             check_int("--trial-ids", trial_id, minimum=0)
         ids = resolved.trial_ids_array().tolist()
         if resolved.trial_ids is not None:

@@ -5,7 +5,9 @@
 
 from __future__ import annotations
 
+import fcntl
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +79,7 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     if not out.is_dir():
         what = "is a file" if out.exists() else "does not exist"
         raise ValueError(f"{out} {what}; give a run folder (one that `somarm train` wrote)")
+    _check_not_being_written(out)
     for name in ("config.json", "learner.npz"):
         if not (out / name).is_file():
             raise ValueError(f"{out} is not a run folder: {name} is missing")
@@ -96,6 +99,23 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     _check_learner_fits(config, learner, out / "learner.npz")
     _check_settings_fit(config.learner_config.to_dict(), learner.config.to_dict(), out / "learner.npz")
     return config, learner
+
+
+def _check_not_being_written(out: Path) -> None:
+    """Refuse a folder that a somarm process holds now (its run is not written yet), naming the process."""
+    from somarm.run.claim import LOCK_NAME
+
+    try:
+        fd = os.open(out / LOCK_NAME, os.O_RDONLY)
+    except OSError:  # no lock file: no process ever claimed it, or it was made by hand
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError:
+        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+        raise ValueError(f"{out} is being written by a somarm process (pid {owner}); wait for it to finish") from None
+    finally:
+        os.close(fd)
 
 
 def _check_settings_fit(wanted: dict[str, Any], held: dict[str, Any], path: Path) -> None:

@@ -8,6 +8,7 @@ first, and the final line once.
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from typing import TextIO
@@ -88,7 +89,8 @@ class Progress:
         self._drawn_step = step
         filled = int(30 * step / self.total)
         bar = "#" * filled + "." * (30 - filled)
-        text = f"{self.label} [{bar}] {step}/{self.total}  mean reward {mean_reward:+.4f}  {now - self._start:6.1f} s"
+        mean = f"{mean_reward:+.4f}" if math.isfinite(mean_reward) else "   -   "  # no whole block yet
+        text = f"{self.label} [{bar}] {step}/{self.total}  mean reward {mean}  {now - self._start:6.1f} s"
         self.stream.write(f"\r{text}" if self.terminal else f"{text}\n")
         self.stream.flush()
         if self.terminal:

@@ -41,7 +41,9 @@ def load_rows(out: Path) -> dict[str, dict[str, Any]]:
         except (OSError, UnicodeDecodeError, json.JSONDecodeError):
             continue
         complete = isinstance(row, dict) and row.get("key") == path.stem and "error" in row
-        if complete and (row["error"] or all(isinstance(row.get(m), float) for m in METRICS)):
+        finished = complete and all(isinstance(row.get(m), float) for m in METRICS) and \
+            math.isfinite(row["greedy_error"])  # a damaged file's NaN is no result: the point runs again
+        if complete and (row["error"] or finished):
             rows[path.stem] = row
     return rows
 

@@ -9,6 +9,7 @@ that fails gives a row holding its error, and the other points of its chunk stil
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 
 from somarm import learners, run, tasks
@@ -125,6 +126,8 @@ def _row(index: int, seed: int, result: run.RunResult) -> dict:
     if not greedy or "greedy_error" in greedy:
         raise ValueError(greedy.get("greedy_error", "no step was trained"))
     greedy_error, greedy_error_sd = run.greedy_cost(greedy)
+    if not math.isfinite(greedy_error):
+        raise FloatingPointError(f"the greedy error is {greedy_error} (the learner diverged)")
     summary = run.summary(result)
     return {
         "point": index,

@@ -16,6 +16,7 @@ package is light: the task modules, and with them MuJoCo and dm_control, load on
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import json
 from typing import Any
@@ -89,10 +90,14 @@ def check_params(name: str, params: dict[str, Any]) -> dict[str, Any]:
     entry = record(name)
     entry.check_settable(params)
     texts = entry.text_fields()
+    kinds = {field.name: str(field.type) for field in dataclasses.fields(entry.params)}
     for key, value in params.items():
         if isinstance(value, str) and key not in texts:
-            raise ValueError(f"task parameter {key} of {name} must be a value, got the text {value!r} "
-                             "(tasks.parse_params reads text)")
+            kind = kinds[key]
+            wanted = ("true or false" if "bool" in kind else "a JSON list, such as [[0.3, 0.7]]"
+                      if "tuple" in kind or "list" in kind else "a number written with the digits 0-9"
+                      if "float" in kind or "int" in kind else "a JSON value")
+            raise ValueError(f"task parameter {key} of {name} takes {wanted}, got the text {value!r}")
     entry.params_from(params)
     return dict(params)
 

@@ -58,7 +58,7 @@ def test_a_whole_learner_config_is_used_as_given_and_overrides_change_it():
     ({"overrides": {"epsilon": "0.2"}}, r"^epsilon must be a number, got the text '0.2' \(parse text with"),
     ({"overrides": {"decay": "inv:1000"}}, "^decay must be a Decay"),
     ({"overrides": {"bogus": 1.0}}, "^unknown key 'bogus'; allowed keys: decay, alpha"),
-    ({"task_params": {"radius": "0.2"}}, "^task parameter radius of reach2 must be a value, got the text '0.2'"),
+    ({"task_params": {"radius": "0.2"}}, "^task parameter radius of reach2 takes a number written with the digits 0-9, got the text '0.2'"),
     ({"task_params": {"nope": 1}}, r"^unknown parameter\(s\) nope for task reach2"),
     ({"learner_config": MotoricConfig()}, "^learner_config of a somq learner must be a SOMQConfig, got MotoricConfig$"),
     ({"learner": "bogus"}, "^unknown learner 'bogus'; allowed: somq, motoric, tabular$"),

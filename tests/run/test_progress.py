@@ -54,3 +54,12 @@ def test_a_message_after_an_open_bar_starts_on_its_own_line():
     lines = tty.getvalue().split("\n")
     assert lines[1] == "warning" and lines[0].startswith("\r") and lines[2].startswith("\r")
     assert tty.getvalue().endswith("\n") and not tty.getvalue().endswith("\n\n")
+
+
+def test_no_mean_is_drawn_before_a_whole_block(capsys):
+    import io
+
+    stream = io.StringIO()
+    bar = Progress(10, label="x", stream=stream)
+    bar.update(1, float("nan"), force=True)
+    assert "nan" not in stream.getvalue() and "mean reward    -" in stream.getvalue()

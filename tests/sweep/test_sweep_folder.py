@@ -124,3 +124,16 @@ def test_a_sweep_in_which_no_point_finished_fails_in_one_line(tmp_path, capsys, 
 def test_a_group_size_that_is_not_a_positive_number_is_refused(tmp_path, capsys, size):
     assert _sweep(tmp_path / "sweep", "alpha=0.5,1", "--max-group-mb", size) == 2
     assert "--max-group-mb must be" in _error(capsys)
+
+
+def test_a_point_file_holding_nan_is_run_again_not_taken_as_a_result(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    assert _sweep(out, "alpha=0.5,1") == 0
+    damaged = sorted((out / "points").iterdir())[0]
+    row = json.loads(damaged.read_text())
+    good = row["greedy_error"]
+    damaged.write_text(json.dumps({**row, "greedy_error": float("nan")}))
+    capsys.readouterr()
+    assert _sweep(out, "alpha=0.5,1") == 0
+    assert json.loads(damaged.read_text())["greedy_error"] == good  # run again, the same number
+    assert "nan" not in (out / "best.json").read_text().lower()

@@ -292,8 +292,8 @@ def test_task_parameter_text_is_read_once_into_values():
 
 
 @pytest.mark.parametrize("name, params, match", [
-    ("reach2", {"radius": "0.2"}, r"^task parameter radius of reach2 must be a value, got the text '0.2' "
-                                  r"\(tasks.parse_params reads text\)$"),
+    ("reach2", {"radius": "0.2"}, r"^task parameter radius of reach2 takes a number written with the digits 0-9, "
+                                  r"got the text '0.2'$"),
     ("reach2", {"nope": 1.0}, "^unknown parameter\\(s\\) nope for task reach2; its parameters: centre_x"),
     ("reach2", {"radius": 0.9}, "must lie inside the unit square"),
     ("throw", {"punish_low": "yes"}, "punish_low"),
