@@ -160,10 +160,8 @@ def _cmd_evaluate(args) -> int:
             f"per trial, seed {seed}"
         )
         return 0
-    # Observations, actions and rewards of every trial, in float64, about twice over while they are made.
-    width = learner.observation_low.size + learner.action_low.size + 2
     check_memory(f"--observations {args.observations} for {learner.n_trials} trial(s)",
-                 16.0 * args.observations * learner.n_trials * width, "give fewer --observations")
+                 evaluation.evaluation_bytes(learner, args.observations), "give fewer --observations")
     rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=seed)
     print(
         f"{config.task}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "

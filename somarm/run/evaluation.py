@@ -6,9 +6,9 @@ import numpy as np
 
 from somarm.protocols import BatchedTask, EpisodicTask, Learner
 from somarm.streams import PURPOSES
-from somarm.validation import check_int
+from somarm.validation import check_int, check_memory
 
-__all__ = ["evaluation_rng", "evaluate_greedy", "greedy_episodes"]
+__all__ = ["evaluation_rng", "evaluate_greedy", "evaluation_bytes", "greedy_episodes"]
 
 
 def evaluation_rng(seed: int) -> np.random.Generator:
@@ -34,10 +34,29 @@ def evaluate_greedy(
       Mean reward per trial, shape ``(n_trials,)``.
     """
     n_observations = check_int("n_observations", n_observations)
+    check_memory(f"{n_observations} fresh observations for {learner.n_trials} trial(s)",
+                 evaluation_bytes(learner, n_observations), "give fewer observations")
     observations = task.sample_observations(evaluation_rng(seed), n_observations)
-    batch = np.broadcast_to(observations, (learner.n_trials, *observations.shape))
-    actions = learner.predict(np.ascontiguousarray(batch))
-    return task.evaluate(batch, actions).mean(axis=-1)
+    # A slice of the observations at a time, so that the learner's and the task's working arrays
+    # (trials x observations x units) stay small; every observation is scored alone, so the rewards
+    # do not depend on the slicing, and their mean is taken over all of them at once.
+    size = max(1, _CHUNK_ELEMENTS // learner.n_trials)
+    rewards = np.empty((learner.n_trials, n_observations))
+    for start in range(0, n_observations, size):
+        part = observations[start:start + size]
+        batch = np.ascontiguousarray(np.broadcast_to(part, (learner.n_trials, *part.shape)))
+        rewards[:, start:start + size] = task.evaluate(batch, learner.predict(batch))
+    return rewards.mean(axis=-1)
+
+
+#: Trial-observation pairs scored at once by ``evaluate_greedy`` (bounds its working memory).
+_CHUNK_ELEMENTS = 200_000
+
+
+def evaluation_bytes(learner: Learner, n_observations: int) -> float:
+    """About the memory ``evaluate_greedy`` holds beyond its slices: the observations (float64) and
+    every trial's reward for each, twice over while they are made."""
+    return 16.0 * n_observations * (learner.observation_low.size + learner.n_trials)
 
 
 def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 100, seed: int = 0) -> dict[str, np.ndarray]:

@@ -1,6 +1,7 @@
 """Greedy evaluation of an episodic task: whole episodes, their return, success and length."""
 
 import numpy as np
+import pytest
 
 from somarm.run import evaluation, greedy_cost
 
@@ -45,3 +46,15 @@ def test_mean_episode_length_counts_a_failed_episode_at_the_step_limit():
 def test_a_run_is_ranked_by_its_return_when_episodic_and_by_its_one_step_reward_otherwise():
     assert greedy_cost({"greedy_mean_return": -5.5, "greedy_sd_return": 0.5, "greedy_success_rate": 1.0}) == (5.5, 0.5)
     assert greedy_cost({"greedy_mean_reward": -0.03, "greedy_sd_reward": 0.01}) == (0.03, 0.01)
+
+
+@pytest.mark.parametrize("task_name", ["reach2", "throw_distance"])
+def test_scoring_in_slices_gives_the_rewards_of_one_batch_bit_for_bit(task_name, monkeypatch):
+    from somarm import run
+    from somarm.run import evaluation
+
+    result = run.train(run.RunConfig(task=task_name, n_trials=3, n_steps=300), progress=False)
+    whole = evaluation.evaluate_greedy(result.learner, result.task, n_observations=50, seed=4)
+    monkeypatch.setattr(evaluation, "_CHUNK_ELEMENTS", 7)  # 2 observations of 3 trials at a time
+    sliced = evaluation.evaluate_greedy(result.learner, result.task, n_observations=50, seed=4)
+    np.testing.assert_array_equal(sliced, whole)
