@@ -24,7 +24,7 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["LOCK_NAME", "MANIFEST_NAME", "FolderClaim", "claim"]
+__all__ = ["LOCK_NAME", "MANIFEST_NAME", "FolderClaim", "claim", "writer_of"]
 
 LOCK_NAME = ".somarm.lock"
 MANIFEST_NAME = ".somarm-manifest.json"
@@ -232,7 +232,7 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
-        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+        owner = _pid_in(fd)
         os.close(fd)
         raise ValueError(f"{flag} {folder} is being written by another somarm process (pid {owner}); "
                          f"wait for it to finish, or give another {flag}") from None
@@ -261,6 +261,26 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
         _leave_as_found(folder, created, had_lock)
         raise
     return held
+
+
+def _pid_in(fd: int) -> str:
+    """The pid a lock file holds (its writer wrote it there), or ``unknown``."""
+    return os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+
+
+def writer_of(folder: Path) -> str | None:
+    """The pid of the somarm process writing ``folder`` now, or None where none is."""
+    try:
+        fd = os.open(folder / LOCK_NAME, os.O_RDONLY)
+    except OSError:  # no lock file: no process ever claimed it
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        return None
+    except OSError:
+        return _pid_in(fd)
+    finally:
+        os.close(fd)
 
 
 def _leave_as_found(folder: Path, created: bool, had_lock: bool) -> None:

@@ -5,9 +5,7 @@
 
 from __future__ import annotations
 
-import fcntl
 import json
-import os
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +15,7 @@ from somarm import __version__
 from somarm.io import atomic_save_npz, atomic_write_json
 from somarm.protocols import BatchedTask, Learner
 from somarm.run.build import make_task
+from somarm.run.claim import writer_of
 from somarm.run.config import RunConfig
 from somarm.run.group import RunResult
 from somarm.run.summary import summary
@@ -79,7 +78,8 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     if not out.is_dir():
         what = "is a file" if out.exists() else "does not exist"
         raise ValueError(f"{out} {what}; give a run folder (one that `somarm train` wrote)")
-    _check_not_being_written(out)
+    if (writer := writer_of(out)) is not None:
+        raise ValueError(f"{out} is being written by a somarm process (pid {writer}); wait for it to finish")
     for name in ("config.json", "learner.npz"):
         if not (out / name).is_file():
             raise ValueError(f"{out} is not a run folder: {name} is missing")
@@ -99,23 +99,6 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     _check_learner_fits(config, learner, out / "learner.npz")
     _check_settings_fit(config.learner_config.to_dict(), learner.config.to_dict(), out / "learner.npz")
     return config, learner
-
-
-def _check_not_being_written(out: Path) -> None:
-    """Refuse a folder that a somarm process holds now (its run is not written yet), naming the process."""
-    from somarm.run.claim import LOCK_NAME
-
-    try:
-        fd = os.open(out / LOCK_NAME, os.O_RDONLY)
-    except OSError:  # no lock file: no process ever claimed it, or it was made by hand
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-    except OSError:
-        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
-        raise ValueError(f"{out} is being written by a somarm process (pid {owner}); wait for it to finish") from None
-    finally:
-        os.close(fd)
 
 
 def _check_settings_fit(wanted: dict[str, Any], held: dict[str, Any], path: Path) -> None:
