@@ -171,17 +171,13 @@ def _cmd_evaluate(args) -> int:
 
 
 def _cmd_reproduce(args) -> int:
-    from somarm.reproduce import runner, sizes
+    from somarm.reproduce import runner
     from somarm.run.claim import claim
     from somarm.run.stopping import sigterm_as_interrupt
-    from somarm.validation import check_int
 
-    names = runner.check_names(args.only)
-    check_int("--seeds", args.seeds)
-    check_int("--jobs", args.jobs)
     # Before --out is claimed: a run that cannot fit must leave no folder and no report behind.
-    sizes.check_seeds({n: {**runner.EXPERIMENTS, **runner.OPTIONAL}[n] for n in names}, quick=args.quick,
-                      seed=args.seed, seeds=args.seeds, backend=args.backend)
+    runner.check_request(args.only, quick=args.quick, seed=args.seed, seeds=args.seeds, jobs=args.jobs,
+                         backend=args.backend)
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
     # into an earlier one: its REPORT.md and claims.json would then mix two runs).

@@ -30,7 +30,7 @@ from somarm.reproduce.sizes import check_seeds
 from somarm.tasks.base import BACKENDS
 from somarm.validation import check_int
 
-__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "reproduce", "load_claims"]
+__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "check_request", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -61,6 +61,24 @@ def check_names(only: list[str] | None) -> list[str]:
     return names
 
 
+def check_request(only: list[str] | None, *, quick: bool, seed: int, seeds: int, jobs: int,
+                  backend: str) -> list[str]:
+    """The experiments to run, after every check that needs nothing written: the names, the counts,
+    the backend and the memory of the seeds (the command line calls it before it claims ``--out``).
+
+    Raises:
+      ValueError: one line naming what is wrong and what is allowed.
+    """
+    names = check_names(only)
+    check_int("--seeds", seeds)
+    check_int("--jobs", jobs)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+    check_seeds({n: {**EXPERIMENTS, **OPTIONAL}[n] for n in names}, quick=quick, seed=seed, seeds=seeds,
+                backend=backend)
+    return names
+
+
 def reproduce(
     out: Path, *, quick: bool = False, only: list[str] | None = None, seed: int = 0, progress: bool = True,
     seeds: int = 1, backend: str = "mujoco", jobs: int = 1, final_out: Path | None = None,
@@ -83,13 +101,7 @@ def reproduce(
     Raises:
       ValueError: before anything is written: an unknown experiment or backend, seeds < 1 or more than fit in memory.
     """
-    names = check_names(only)
-    check_int("seeds", seeds)
-    check_int("jobs", jobs)
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
-    check_seeds({n: {**EXPERIMENTS, **OPTIONAL}[n] for n in names}, quick=quick, seed=seed, seeds=seeds,
-                backend=backend)
+    names = check_request(only, quick=quick, seed=seed, seeds=seeds, jobs=jobs, backend=backend)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     all_seeds = tuple(range(seed, seed + seeds))
     settings = {"quick": quick, "seeds": list(all_seeds), "backend": backend}
