@@ -30,11 +30,17 @@ exactly its own step's accuracy; its landing is ``c`` times the scaled x. A thro
 scaling depend only on the throw itself, and projectiles in one model do not interact, so a
 throw lands at the same x alone, in any batch, and in the dm_env launcher.
 
-A batch is sorted by flight length (in model steps) and cut into chunks whose cost, steps times
-(a fixed cost per step plus one per projectile), is small: small batches in a few chunks of
-similar flights, large ones in chunks of ``chunk`` throws. Each chunk is one native
-``mujoco.rollout`` call (no Python per step); chunks are shared between threads, each with
-its own model copies, and MuJoCo releases the GIL while it steps.
+A batch flies as the bodies of one model built for its size (and cached): the staircase. The
+throws are sorted by flight length (in model steps); the model steps them all from the launch,
+one native ``mujoco.rollout`` per segment (no Python per step), and after each segment the throws
+that have landed are located and leave: the rest go on from their state in a model of their own
+size. So a throw pays for its own steps, and the batch pays MuJoCo's fixed cost per model step
+once per step of its longest flight, not once per group of similar flights. Where the segments end
+is chosen by dynamic programming over a cost model (``_stairs``). A batch of more than ``cap``
+throws (or one that two threads finish sooner) is cut into groups of similar flights, each its
+own staircase; groups are shared between threads, each with its own models, and MuJoCo releases
+the GIL while it steps. Moving a throw between models copies its state exactly, so it lands
+where it lands alone.
 """
 
 from __future__ import annotations
@@ -62,22 +68,23 @@ DEFAULT_TOLERANCE = 9e-7
 MAX_KH = 1.0
 #: The models' own step: a throw of step c runs in the time t / c (see the module docstring).
 SCALED_STEP = 1.0
-_CHUNK = 256
-#: The fixed cost of one model step, and of one native call with its set-up and landing, in
-#: projectile-steps (measured: about 6 us per RK4 step of a model, 0.9 us per projectile in it,
-#: and some 40 us per call); they decide how finely a small batch is cut.
+#: Most throws in one model: a larger batch flies as several staircases (``_groups``).
+_CAP = 256
+#: The fixed cost of one model step, and of one segment of a staircase (a native rollout with its
+#: set-up and landings), in projectile-steps (measured: about 3.5 us per RK4 step of a model, 0.45 us
+#: per projectile in it, and some 12 us per segment); they decide where the segments end.
 _STEP_COST = 7.0
-_CALL_COST = 40.0
+_SEGMENT_COST = 30.0
 #: What handing a share of a batch to another thread costs, in projectile-steps (measured: about
 #: 0.4 ms of submitting, waiting and sharing the GIL; below some 60 throws one thread is sooner).
 _THREAD_COST = 600.0
-#: Projectiles per model: a chunk runs in the smallest of these that holds it (few models built).
+#: Projectiles per model: a segment runs in the smallest of these that holds its throws (few models built).
 _SIZES = (*range(1, 17), *range(20, 65, 4), *range(80, 257, 16))
-#: ``_SIZE_OF[m]``: the model size for a chunk of ``m`` (index 0 unused), as floats for ``_cut``.
+#: ``_SIZE_OF[m]``: the model size for ``m`` throws (index 0 unused), as floats for ``_stairs``.
 _SIZE_OF = np.array([0.0] + [min(s for s in _SIZES if s >= m) for m in range(1, _SIZES[-1] + 1)])
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _FORCE = mujoco.mjtState.mjSTATE_QFRC_APPLIED
-#: Threads for batches of more than one chunk (2 by default: a small machine); see ``tasks.set_threads``.
+#: Threads for large batches (2 by default: a small machine); see ``tasks.set_threads``.
 THREADS = 2
 
 
@@ -302,10 +309,12 @@ def max_steps_for(uy_max: float, *, G: float, dt: float) -> int:
 class ProjectileBatch:
     """``n`` projectiles of unit mass in one MuJoCo model, with ``models/launcher.xml``'s options.
 
-    The model's step is ``SCALED_STEP``; ``land`` gives each throw its own step by scaling.
+    Projectile ``i`` is body ``projectile{i}`` with the slide joints ``x{i}`` (dof 2i) and
+    ``height{i}`` (dof 2i + 1). The model's step is ``SCALED_STEP``: each throw gets its own
+    step by scaling (module docstring). Built once per size and thread (``_batch_for_thread``).
 
     Args:
-      n: projectiles in the model (a chunk of a larger batch).
+      n: projectiles in the model.
       G: gravity.
     """
 
@@ -326,65 +335,36 @@ class ProjectileBatch:
         self.model.opt.disableflags = base.opt.disableflags
         self.data = mujoco.MjData(self.model)
         self.n, self.G = n, float(G)
-        self._x, self._z = slice(0, 2 * n, 2), slice(1, 2 * n, 2)
-        self._n_state = mujoco.mj_stateSize(self.model, _STATE)
-        self._qpos = slice(1, 1 + self.model.nq)  # a full-physics state is (time, qpos, qvel, ...)
-        self._qvel = slice(1 + self.model.nq, 1 + self.model.nq + self.model.nv)
-        # Reused buffers: the x dofs' damping (a view of the model), the launch state, and one
-        # step's applied force (the wind's share of the drag).
-        self._damping = self.model.dof_damping[self._x]
-        self._launch = np.zeros((1, self._n_state))
-        self._ux = self._launch[0, self._qvel][self._x]
-        self._lift = self._launch[0, self._qvel][self._z]
-        self._force = np.zeros(self.model.nv)
-        self._wind = self._force[self._x]
+        self.n_state = mujoco.mj_stateSize(self.model, _STATE)
+        #: Where qvel starts in a full-physics state row (time, qpos, qvel, ...).
+        self.qvel = 1 + self.model.nq
+        # Views of the x dofs' damping (the drag rate) and applied force (the wind's share of the drag).
+        self._damping = self.model.dof_damping[0::2]
+        self._wind = self.data.qfrc_applied[0::2]
 
-    def land(self, out, ux, uy, k, W, scale) -> None:
-        """Landing x of up to ``n`` throws into ``out`` (1-D arrays of length ``m <= n``; ``k`` = Fr / M,
-        ``scale`` each throw's RK4 step), simulated in one native rollout; buffers reused."""
-        m = len(ux)
-        model = self.model
-        rate = scale * k
+    def roll(self, start: np.ndarray, nstep: int, rate: np.ndarray, push: np.ndarray) -> np.ndarray:
+        """``nstep`` RK4 steps in one native rollout from a full-physics state row.
+
+        Args:
+          start: the state row ``(n_state,)`` to start from.
+          nstep: steps to take (>= 1).
+          rate, push: the drag rate (the x dofs' damping) and the force on the x dofs of the
+            first ``len(rate)`` projectiles; the rest get none.
+
+        Returns:
+          The rows ``(nstep + 1, n_state)``: ``start``, then the state after every step.
+        """
+        m = len(rate)
         self._damping[:m] = rate
         self._damping[m:] = 0.0
-        self._wind[:m] = -rate * W
+        self._wind[:m] = push
         self._wind[m:] = 0.0
-        self._ux[:m] = ux
-        self._ux[m:] = 0.0
-        lift = uy / scale
-        self._lift[:m] = lift  # unused slots stay at rest and land in the first step
-        self._lift[m:] = 0.0
-        steps = max_steps_for(float(lift.max()), G=self.G, dt=SCALED_STEP)
-        force = np.empty((1, steps, model.nv))
-        force[0] = self._force
-        states = np.empty((1, steps + 1, self._n_state))
-        states[0, 0] = self._launch[0]
-        mj_rollout.rollout([model], [self.data], self._launch, force, control_spec=_FORCE, nstep=steps,
-                           state=states[:, 1:], skip_checks=True)
-        if not _land_rows(states[0], m, 1, 1 + model.nq, self.G, SCALED_STEP, scale, out):
-            raise RuntimeError(f"projectile(s) still flying after {steps} steps")
-
-
-@numba.njit(cache=True, nogil=True)
-def _land_rows(states, m, qpos, qvel, gravity, dt, scale, out):
-    """``_landings`` of a rollout's rows for projectiles ``0..m-1`` (dofs 2i and 2i+1), times
-    ``scale``, into ``out``: the first row at or below the ground, then ``_locate_one``.
-
-    Returns False if a projectile is still above the ground in the last row.
-    """
-    rows = states.shape[0]
-    for i in range(m):
-        x, z = 2 * i, 2 * i + 1
-        after = 1
-        while after < rows and states[after, qpos + z] > 0.0:
-            after += 1
-        if after == rows:
-            return False
-        before = after - 1
-        out[i] = _locate_one(states[before, qpos + z], states[before, qvel + z], states[before, qpos + x],
-                             states[before, qvel + x], states[after, qpos + x], states[after, qvel + x],
-                             gravity, dt) * scale[i]
-    return True
+        rows = np.empty((nstep + 1, self.n_state))
+        rows[0] = start
+        # control=None with qfrc_applied in the spec: the rollout keeps the data's force throughout.
+        mj_rollout.rollout([self.model], [self.data], rows[:1], None, control_spec=_FORCE, nstep=nstep,
+                           state=rows[None, 1:], skip_checks=True)
+        return rows
 
 
 _base: list[mujoco.MjModel] = []
@@ -410,113 +390,205 @@ def _batch_for_thread(n: int, G: float) -> ProjectileBatch:
 
 
 def _model_size(m: int) -> int:
-    """Projectiles in the model for a chunk of ``m``: the smallest of ``_SIZES`` that holds it."""
+    """Projectiles in the model for ``m`` throws: the smallest of ``_SIZES`` that holds them."""
     return int(_SIZE_OF[m]) if m < len(_SIZE_OF) else m
 
 
-@numba.njit(cache=True)
-def _cut(steps, size_of, cap, step_cost, call_cost):
-    """Cheapest cut of ascending flights into chunks of at most ``cap`` (dynamic programming).
-
-    A chunk ``[a, b)`` costs ``call_cost + steps[b - 1] * (step_cost + size_of[b - a])``: one
-    native call, then its longest flight's steps, each a fixed cost plus one per projectile of
-    its model. Returns each prefix's best last-chunk start (``start[b]`` for the chunk ending at b).
-    """
-    n = steps.shape[0]
-    best = np.empty(n + 1)
-    best[0] = 0.0
-    start = np.zeros(n + 1, np.int64)
-    for b in range(1, n + 1):
-        lowest = np.inf
-        where = 0
-        for a in range(max(0, b - cap), b):
-            cost = best[a] + call_cost + steps[b - 1] * (step_cost + size_of[b - a])
-            if cost < lowest:
-                lowest = cost
-                where = a
-        best[b] = lowest
-        start[b] = where
-    return start
-
-
-def _partition(lengths: np.ndarray, size: int) -> list[tuple[int, int]]:
-    """Chunks ``(start, stop)`` of ascending flight lengths (in model steps), at most ``size`` each.
-
-    The cut with least cost (``_cut``): a chunk pays a native call, then per step a fixed cost
-    and one per projectile of its model (``_SIZES``, so a few models serve every chunk). Small
-    batches come out as a few chunks of similar flights, large ones as full chunks.
-    """
-    return _cut_steps(_model_steps(np.asarray(lengths, dtype=np.float64)), size)
-
-
 def _model_steps(lengths: np.ndarray) -> np.ndarray:
-    """The model steps ``ProjectileBatch.land`` takes for flights of these lengths (``max_steps_for``)."""
+    """Model steps that cover flights of these lengths (in model steps): ``max_steps_for``'s count."""
     return np.ceil(lengths - 1e-9) + 1.0
 
 
-def _cut_steps(steps: np.ndarray, size: int) -> list[tuple[int, int]]:
-    """``_partition`` of flights given by their model steps."""
-    start = _cut(steps, _SIZE_OF, max(1, min(int(size), len(_SIZE_OF) - 1)), _STEP_COST, _CALL_COST)
-    bounds = []
-    stop = len(steps)
-    while stop > 0:
-        bounds.append((int(start[stop]), stop))
-        stop = bounds[-1][0]
-    return bounds[::-1]
+@numba.njit(cache=True)
+def _stairs_kernel(steps, size_of, step_cost, segment_cost):
+    """``_stairs`` compiled: segment ends ``(landed, step)`` and the cost, by dynamic programming.
 
-
-def _chunk_cost(steps: np.ndarray, a: int, b: int) -> float:
-    return _CALL_COST + float(steps[b - 1]) * (_STEP_COST + _model_size(b - a))
-
-
-def _schedule(lengths: np.ndarray, chunk: int, workers: int) -> tuple[list[list[tuple[int, int]]], float]:
-    """Chunks of the sorted flights shared between up to ``workers`` threads, and the longest share's cost.
-
-    Each share takes the next longest chunk while it is the least loaded. With several threads a
-    cut into smaller chunks can finish sooner than the cheapest cut, so a cap of the batch over the
-    threads is tried too; handing work to another thread costs ``_THREAD_COST`` (measured: a small
-    batch is done sooner in one thread), and the schedule that ends first is kept.
+    A segment may end only after the last flight of a given length, so the choices are the
+    distinct lengths: ``best[u]`` is the cheapest way to finish once the flights of the first u
+    distinct lengths have landed.
     """
-    steps = _model_steps(lengths)
-    n = len(lengths)
-    alone = _cut_steps(steps, chunk)
-    best = ([alone], sum(_chunk_cost(steps, a, b) for a, b in alone))
-    if workers == 1:
-        return best
-    for cap in sorted({chunk, min(chunk, max(1, -(-n // workers)))}, reverse=True):
-        bounds = alone if cap == chunk else _cut_steps(steps, cap)
-        if len(bounds) < 2:
+    n = steps.shape[0]
+    ends = np.empty(n, np.int64)  # after the last flight of each distinct length
+    u = 0
+    for i in range(n):
+        if i == n - 1 or steps[i + 1] != steps[i]:
+            ends[u] = i + 1
+            u += 1
+    distinct = u
+    best = np.full(distinct + 1, np.inf)
+    best[distinct] = 0.0
+    after = np.zeros(distinct + 1, np.int64)
+    for u in range(distinct - 1, -1, -1):
+        landed = ends[u - 1] if u > 0 else 0
+        begin = steps[landed - 1] if landed > 0 else 0.0
+        alive = n - landed
+        per_step = step_cost + (size_of[alive] if alive < size_of.shape[0] else alive)
+        for v in range(u, distinct):
+            cost = segment_cost + (steps[ends[v] - 1] - begin) * per_step + best[v + 1]
+            if cost < best[u]:
+                best[u] = cost
+                after[u] = v + 1
+    count = 0
+    u = 0
+    while u < distinct:
+        u = after[u]
+        count += 1
+    landed_after = np.empty(count, np.int64)
+    end_step = np.empty(count, np.int64)
+    u = 0
+    for j in range(count):
+        u = after[u]
+        landed_after[j] = ends[u - 1]
+        end_step[j] = int(steps[ends[u - 1] - 1])
+    return landed_after, end_step, best[0]
+
+
+def _stairs(steps: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """The cheapest staircase for flights of ascending model steps (``_model_steps``).
+
+    The whole batch starts in one model; each segment is one native rollout, after which the
+    throws that have landed leave and the rest go on in a model of their size. A segment costs
+    ``_SEGMENT_COST``, then per model step ``_STEP_COST`` plus one per projectile of its model
+    (all in projectile-steps).
+
+    Returns:
+      ``(landed, end, cost)``: after segment j the first ``landed[j]`` throws have landed (by
+      plan) and the flights stand at model step ``end[j]``; the last segment lands them all.
+    """
+    return _stairs_kernel(np.asarray(steps, dtype=np.float64), _SIZE_OF, _STEP_COST, _SEGMENT_COST)
+
+
+@numba.njit(cache=True, nogil=True)
+def _land_segment(rows, m, qvel, gravity, slots, scale, out, keep):
+    """Landings of a segment's rows for model slots ``0..m-1`` (dofs 2i and 2i+1).
+
+    A slot is landed if its height is at or below 0 in a row after the first; its landing is
+    located inside that step (``_locate_one``), times its throw's ``scale``, into
+    ``out[slots[i]]``. The slots still flying go to ``keep``; returns how many.
+    """
+    n_rows = rows.shape[0]
+    flying = 0
+    for i in range(m):
+        x, z = 1 + 2 * i, 2 + 2 * i
+        after = 1
+        while after < n_rows and rows[after, z] > 0.0:
+            after += 1
+        if after == n_rows:
+            keep[flying] = i
+            flying += 1
             continue
-        cost = [_chunk_cost(steps, a, b) for a, b in bounds]
-        shares: list[list[tuple[int, int]]] = [[] for _ in range(workers)]
-        load = [0.0] * workers
-        for i in sorted(range(len(bounds)), key=lambda i: -cost[i]):
+        b = after - 1
+        throw = slots[i]
+        out[throw] = _locate_one(rows[b, z], rows[b, qvel + 2 * i + 1], rows[b, x], rows[b, qvel + 2 * i],
+                                 rows[after, x], rows[after, qvel + 2 * i], gravity, SCALED_STEP) * scale[throw]
+    return flying
+
+
+@numba.njit(cache=True, nogil=True)
+def _carry(last, qvel, keep, flying, start, start_qvel):
+    """The next segment's first row: time, then the kept slots' positions and velocities in order."""
+    start[:] = 0.0
+    start[0] = last[0]
+    for j in range(flying):
+        i = keep[j]
+        start[1 + 2 * j] = last[1 + 2 * i]
+        start[2 + 2 * j] = last[2 + 2 * i]
+        start[start_qvel + 2 * j] = last[qvel + 2 * i]
+        start[start_qvel + 2 * j + 1] = last[qvel + 2 * i + 1]
+
+
+def _fly_stairs(arrays, out: np.ndarray, G: float) -> None:
+    """Land one group of sorted throws into ``out`` (same order), as the staircase ``_stairs`` plans.
+
+    Args:
+      arrays: ``ux, uy, k, W, scale`` (each throw's RK4 step) and ``steps`` (``_model_steps``).
+      out: the landings, written here.
+
+    Raises:
+      RuntimeError: a throw is still in the air after the steps that cover its flight.
+    """
+    ux, uy, k, W, scale, steps = arrays
+    n = len(ux)
+    landed, ends, _ = _stairs(steps)
+    rate = scale * k
+    push = -rate * W
+    slots = np.arange(n)
+    batch = _batch_for_thread(_model_size(n), G)
+    start = np.zeros(batch.n_state)
+    start[batch.qvel:batch.qvel + 2 * n:2] = ux
+    start[batch.qvel + 1:batch.qvel + 2 * n:2] = uy / scale
+    keep = np.empty(n, np.int64)
+    begin = 0
+    for planned, end in zip(landed, ends, strict=True):
+        rows = batch.roll(start, int(end) - begin, rate[slots], push[slots])
+        flying = _land_segment(rows, len(slots), batch.qvel, G, slots, scale, out, keep)
+        if flying > n - planned:
+            raise RuntimeError(f"projectile(s) still flying after {int(end)} steps")
+        if flying == 0:
+            return
+        nxt = _batch_for_thread(_model_size(flying), G)
+        start = np.empty(nxt.n_state)
+        _carry(rows[-1], batch.qvel, keep, flying, start, nxt.qvel)
+        slots = slots[keep[:flying]]
+        batch, begin = nxt, int(end)
+    raise RuntimeError(f"projectile(s) still flying after {begin} steps")  # pragma: no cover - planned away
+
+
+def _groups(steps: np.ndarray, cap: int, workers: int) -> tuple[list[list[tuple[int, int]]], float]:
+    """Contiguous groups of the sorted flights, each a staircase, shared between up to ``workers`` threads.
+
+    A batch of more than ``cap`` throws is cut into groups of about equal work (model steps); with
+    several threads, a cut into one group per thread is tried too, and kept if it ends sooner by
+    more than handing work to another thread costs (``_THREAD_COST``).
+
+    Returns:
+      The groups ``(start, stop)`` of each thread, and the longest thread's cost.
+    """
+    n = len(steps)
+    counts = sorted({max(1, -(-n // cap)), *((workers,) if workers > 1 and n > 1 else ())})
+    best: tuple[list[list[tuple[int, int]]], float] | None = None
+    for count in counts:
+        work = np.cumsum(steps)
+        cuts = np.searchsorted(work, work[-1] * np.arange(1, count) / count, side="right")
+        bounds = [int(b) for b in (0, *cuts, n)]
+        groups = [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+        groups = [piece for a, b in groups for piece in _within_cap(a, b, cap)]
+        costs = [_stairs(steps[a:b])[2] for a, b in groups]
+        shares: list[list[tuple[int, int]]] = [[] for _ in range(min(workers, len(groups)))]
+        load = [0.0] * len(shares)
+        for i in sorted(range(len(groups)), key=lambda i: -costs[i]):
             w = load.index(min(load))
-            shares[w].append(bounds[i])
-            load[w] += cost[i]
-        if max(load) + _THREAD_COST < best[1]:
-            best = ([s for s in shares if s], max(load) + _THREAD_COST)
+            shares[w].append(groups[i])
+            load[w] += costs[i]
+        finish = max(load) + (_THREAD_COST if len(shares) > 1 else 0.0)
+        if best is None or finish < best[1]:
+            best = (shares, finish)
     return best
 
 
-def _run_chunks(bounds: list[tuple[int, int]], arrays, out: np.ndarray, G: float) -> None:
-    """Land the sorted throws ``[a, b)`` of each chunk into ``out`` (sorted order)."""
-    ux, uy, k, W, scale = arrays
-    for a, b in bounds:
-        batch = _batch_for_thread(_model_size(b - a), G)
-        batch.land(out[a:b], ux[a:b], uy[a:b], k[a:b], W[a:b], scale[a:b])
+def _within_cap(a: int, b: int, cap: int) -> list[tuple[int, int]]:
+    """``[a, b)`` in equal pieces of at most ``cap``."""
+    pieces = -(-(b - a) // cap)
+    bounds = np.linspace(a, b, pieces + 1).round().astype(int)
+    return [(int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _run_groups(groups: list[tuple[int, int]], arrays, out: np.ndarray, G: float) -> None:
+    """Land the sorted throws ``[a, b)`` of each group into ``out`` (sorted order)."""
+    for a, b in groups:
+        _fly_stairs(tuple(x[a:b] for x in arrays), out[a:b], G)
 
 
 def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float = DEFAULT_TOLERANCE,
-              n_threads: int | None = None, chunk: int = _CHUNK) -> np.ndarray:
+              n_threads: int | None = None, cap: int = _CAP) -> np.ndarray:
     """Landing x of many throws simulated in MuJoCo (unchecked: the tasks validate first).
 
     Args:
       ux, uy: launch velocities, broadcast with the parameters to one shape ``(...)``.
       G: gravity (a scalar for the whole batch). Fr, W, M: drag, wind and mass, per throw or scalar.
       tolerance: landing error bound that picks each throw's step (``step_for``).
-      n_threads: threads for batches of more than one chunk (default ``THREADS``).
-      chunk: most throws per model.
+      n_threads: threads for large batches (default ``THREADS``).
+      cap: most throws in one model (a larger batch flies as several staircases).
 
     Returns:
       Landing x of shape ``(...)``.
@@ -527,7 +599,7 @@ def landing_x(ux, uy, *, G: float = 0.05, Fr=0.1, W=0.0, M=1.0, tolerance: float
         return np.empty(shape)
     workers = max(1, threads_here(THREADS) if n_threads is None else n_threads)
     plan = _plan(*(np.ascontiguousarray(a).ravel() for a in arrays), G=G, tolerance=tolerance, workers=workers,
-                 chunk=chunk)
+                 cap=cap)
     landed = _fly(plan, G)
     out = np.empty(len(landed))
     out[plan.order] = landed
@@ -538,32 +610,33 @@ class _Plan(NamedTuple):
     """A batch ready to fly: its throws sorted by flight length, and how they are shared out."""
 
     order: np.ndarray  #: the sorting permutation of the batch
-    flat: tuple  #: ux, uy, k, W and scale (each throw's RK4 step) in flight order
+    flat: tuple  #: ux, uy, k, W, scale (each throw's RK4 step) and model steps, in flight order
     lengths: np.ndarray  #: flights in model steps, ascending
-    shares: list  #: chunks ``(start, stop)`` of the sorted throws per thread (``_schedule``)
+    shares: list  #: groups ``(start, stop)`` of the sorted throws per thread (``_groups``)
 
 
-def _plan(ux, uy, Fr, W, M, *, G: float, tolerance: float, workers: int, chunk: int) -> _Plan:
-    """Each throw's step, the flights sorted by length (every chunk then a slice, a view), and the
-    schedule of their chunks over ``workers`` threads (1-D arrays of one length)."""
+def _plan(ux, uy, Fr, W, M, *, G: float, tolerance: float, workers: int, cap: int = _CAP) -> _Plan:
+    """Each throw's step, the flights sorted by length (every group then a slice, a view), and the
+    groups shared out over ``workers`` threads (1-D arrays of one length)."""
     k = Fr / M
     scale = step_for(ux, uy, W, k, G=G, tolerance=tolerance)
     lengths = 2.0 * (uy / scale) / (G * SCALED_STEP)  # flight in model steps
     order = np.argsort(lengths, kind="stable")
     lengths = lengths[order]
-    shares, _ = _schedule(lengths, max(1, chunk), workers)
-    return _Plan(order, tuple(a[order] for a in (ux, uy, k, W, scale)), lengths, shares)
+    steps = _model_steps(lengths)
+    shares, _ = _groups(steps, max(1, min(int(cap), _SIZES[-1])), workers)
+    return _Plan(order, (*(a[order] for a in (ux, uy, k, W, scale)), steps), lengths, shares)
 
 
 def _fly(plan: _Plan, G: float) -> np.ndarray:
     """Landing x of a planned batch, in flight order; the shares beyond the first on the shared pool."""
     landed = np.empty(len(plan.order))
     if len(plan.shares) == 1:
-        _run_chunks(plan.shares[0], plan.flat, landed, G)
+        _run_groups(plan.shares[0], plan.flat, landed, G)
     else:
         pool = shared_pool(len(plan.shares))
-        futures = [pool.submit(_run_chunks, share, plan.flat, landed, G) for share in plan.shares[1:]]
-        _run_chunks(plan.shares[0], plan.flat, landed, G)  # the calling thread takes a share too
+        futures = [pool.submit(_run_groups, share, plan.flat, landed, G) for share in plan.shares[1:]]
+        _run_groups(plan.shares[0], plan.flat, landed, G)  # the calling thread takes a share too
         for future in futures:
             future.result()
     return landed

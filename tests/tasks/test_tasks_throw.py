@@ -138,20 +138,6 @@ def test_params_for_an_observation_drive_the_same_flight_as_the_task():
     assert default[-1, 0] == pytest.approx(ballistics.landing_x(0.7, 0.6), abs=1e-6)
 
 
-def test_a_throw_lands_at_the_same_x_in_any_chunking_or_threading():
-    throws = _random_throws(300, 3)
-    args = (throws["ux"], throws["uy"])
-    kwargs = {"G": 0.05, "Fr": throws["Fr"], "W": throws["W"], "M": throws["M"]}
-    reference = flight.landing_x(*args, **kwargs)
-    for chunk, threads in ((1, 1), (7, 2), (256, 1), (64, 2)):
-        np.testing.assert_array_equal(flight.landing_x(*args, **kwargs, chunk=chunk, n_threads=threads), reference)
-    # A training step's batch of 20 and a throw alone, as the tasks call it.
-    part = slice(40, 60)
-    small = flight.landing_x(args[0][part], args[1][part], G=0.05, Fr=throws["Fr"][part], W=throws["W"][part],
-                             M=throws["M"][part])
-    np.testing.assert_array_equal(small, reference[part])
-
-
 def test_the_dm_env_launcher_lands_where_the_batch_does():
     throws = _random_throws(40, 4)
     batch = landing_x(throws["ux"], throws["uy"], Fr=throws["Fr"], W=throws["W"], M=throws["M"])
@@ -163,50 +149,6 @@ def test_the_dm_env_launcher_lands_where_the_batch_does():
         launch = physics.launch(ux, uy, step=float(flight.step_for(ux, uy, c["W"], c["Fr"] / c["M"], G=0.05)))
         physics.step()  # the dm_env takes the first step itself
         assert float(physics.fly(previous=launch)[0]) == batch[i]
-
-
-def test_chunks_cover_the_sorted_batch_in_order_and_respect_the_size():
-    rng = np.random.default_rng(0)
-    for n, size in ((1, 256), (20, 256), (100, 256), (3000, 256), (50, 8)):
-        lengths = np.sort(rng.uniform(0.0, 160.0, n))
-        bounds = flight._partition(lengths, size)
-        assert bounds[0][0] == 0 and bounds[-1][1] == n
-        assert all(a < b <= a + size for a, b in bounds)
-        assert all(b == a2 for (_, b), (a2, _) in zip(bounds, bounds[1:], strict=False))
-    # The cut is the cheapest under the cost model: a brute force over every cut of small batches
-    # agrees, and a large batch costs no more than cut into full chunks.
-    def cost(lengths, bounds):
-        steps = np.ceil(lengths - 1e-9) + 1.0
-        return sum(flight._chunk_cost(steps, a, b) for a, b in bounds)
-
-    for n in (1, 5, 9):
-        lengths = np.sort(rng.uniform(0.0, 60.0, n))
-        every = []
-        for mask in range(2 ** (n - 1)):  # bit i set: a cut after flight i
-            cuts = [0] + [i + 1 for i in range(n - 1) if mask >> i & 1] + [n]
-            every.append(cost(lengths, list(zip(cuts, cuts[1:], strict=False))))
-        assert cost(lengths, flight._partition(lengths, 256)) == pytest.approx(min(every))
-    lengths = np.sort(rng.uniform(0, 160, 3000))
-    full = [(a, min(a + 256, 3000)) for a in range(0, 3000, 256)]
-    assert cost(lengths, flight._partition(lengths, 256)) < cost(lengths, full)
-
-
-def test_a_schedule_covers_the_batch_once_over_its_threads():
-    rng = np.random.default_rng(3)
-    for n, workers in ((1, 2), (20, 2), (100, 2), (400, 3), (100, 1)):
-        lengths = np.sort(rng.uniform(0.0, 45.0, n))
-        shares, longest = flight._schedule(lengths, 256, workers)
-        assert 1 <= len(shares) <= workers
-        covered = sorted(bound for share in shares for bound in share)
-        assert covered[0][0] == 0 and covered[-1][1] == n
-        assert all(b == a2 for (_, b), (a2, _) in zip(covered, covered[1:], strict=False))
-        steps = np.ceil(lengths - 1e-9) + 1.0
-        handing_over = flight._THREAD_COST if len(shares) > 1 else 0.0
-        assert longest == pytest.approx(max(sum(flight._chunk_cost(steps, a, b) for a, b in s) for s in shares)
-                                        + handing_over)
-    # A batch of a few short flights stays in one thread; a large one is shared.
-    assert len(flight._schedule(np.sort(rng.uniform(0.0, 20.0, 10)), 256, 2)[0]) == 1
-    assert len(flight._schedule(np.sort(rng.uniform(0.0, 45.0, 1000)), 256, 2)[0]) == 2
 
 
 def test_each_flight_takes_the_fewest_whole_steps_within_the_tolerance():
