@@ -2,8 +2,8 @@
 
 A reach action is a set of joint angles to move *to* (Fig. 6), so no dynamics are needed:
 write qpos, run ``mj_kinematics``, read the ``fingertip`` site. Batches are evaluated on one
-model holding many copies of the arm (built from the arm's own MJCF), chunk by chunk, and
-large batches are shared between threads (MuJoCo releases the GIL).
+model holding many copies of the arm (built from the arm's own MJCF, as many as the batch needs up
+to a most), chunk by chunk, and large batches are shared between threads (MuJoCo releases the GIL).
 """
 
 from __future__ import annotations
@@ -24,8 +24,11 @@ LINK_LENGTHS: dict[int, np.ndarray] = {2: np.array([0.4, 0.4]), 20: np.full(20, 
 _MODELS = {2: "arm2", 20: "arm20"}
 #: The arm models' timestep (s): the unit of the actuated tasks' settle time and control interval.
 TIMESTEP = 0.01
-#: Arms per batch model: enough to hide Python's per-call cost (the 20-link arm needs fewer).
+#: Most arms per batch model: enough to hide Python's per-call cost (the 20-link arm needs fewer).
 _COPIES = {2: 128, 20: 32}
+#: Arms per batch model below the most: a batch runs in the smallest of these that holds it, so a
+#: training step of 5 or 20 arms computes 5 or 20, not a full model's (few models built).
+_SIZES = (*range(1, 9), 12, 16, 20, 24, 32, 48, 64, 96, 128)
 #: Threads for batches of more than 512 arms (2 by default: a small machine); see ``tasks.set_threads``.
 THREADS = 2
 
@@ -114,13 +117,15 @@ class ArmBatch:
 _local = threading.local()
 
 
-def _batch(n_links: int) -> ArmBatch:
+def _batch(n_links: int, m: int) -> ArmBatch:
+    """This thread's model for a batch of ``m`` arms: the smallest size that holds them, at most ``_COPIES``."""
+    copies = min([s for s in _SIZES if s >= m] + [_COPIES[n_links]])
     cache = getattr(_local, "arms", None)
     if cache is None:
         cache = _local.arms = {}
-    if n_links not in cache:
-        cache[n_links] = ArmBatch(n_links)
-    return cache[n_links]
+    if (n_links, copies) not in cache:
+        cache[(n_links, copies)] = ArmBatch(n_links, copies)
+    return cache[(n_links, copies)]
 
 
 def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int | None = None) -> np.ndarray:
@@ -145,11 +150,11 @@ def fingertips(angles: np.ndarray, n_links: int, *, n_threads: int | None = None
     out = np.empty((len(flat), 2))
     workers = (threads_here(THREADS) if n_threads is None else n_threads) if len(flat) > 512 else 1
     if workers <= 1:
-        _batch(n_links).fingertips(flat, out)
+        _batch(n_links, len(flat)).fingertips(flat, out)
     else:
         pool = shared_pool(workers)
         bounds = np.linspace(0, len(flat), workers + 1).astype(int)
-        futures = [pool.submit(lambda a, b: _batch(n_links).fingertips(flat[a:b], out[a:b]), a, b)
+        futures = [pool.submit(lambda a, b: _batch(n_links, b - a).fingertips(flat[a:b], out[a:b]), a, b)
                    for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         for future in futures:
             future.result()

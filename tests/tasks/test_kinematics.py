@@ -55,6 +55,18 @@ def test_batched_fingertips_in_threads_equal_one_thread():
     np.testing.assert_array_equal(arms.fingertips(angles, 2, n_threads=2), arms.fingertips(angles, 2, n_threads=1))
 
 
+@pytest.mark.parametrize("n_links", [2, 20])
+def test_a_batch_runs_in_a_model_of_its_size_and_each_arm_lands_as_alone(n_links):
+    rng = np.random.default_rng(5)
+    angles = rng.uniform(-np.pi, np.pi, (300, n_links))
+    whole = arms.fingertips(angles, n_links)  # in models of the most arms, chunk by chunk
+    for n in (1, 5, 20, 100):
+        if n <= 20:  # a training step's few arms: a model of exactly that many
+            assert arms._batch(n_links, n).copies == n
+        np.testing.assert_array_equal(arms.fingertips(angles[:n], n_links), whole[:n])
+    np.testing.assert_array_equal(arms.fingertips(angles[7], n_links), whole[7])
+
+
 @pytest.mark.parametrize("angles, lengths, match", [
     (np.zeros((4, 3)), [0.4, 0.4], r"shape \(\.\.\., 2\)"),
     (np.zeros(2), [[0.4, 0.4]], "1-D"),
