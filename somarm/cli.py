@@ -175,6 +175,8 @@ def _cmd_reproduce(args) -> int:
     from somarm.run.claim import claim
     from somarm.run.stopping import sigterm_as_interrupt
 
+    if args.jobs is None:
+        args.jobs = runner.default_jobs()
     # Before --out is claimed: a run that cannot fit must leave no folder and no report behind.
     runner.check_request(args.only, quick=args.quick, seed=args.seed, seeds=args.seeds, jobs=args.jobs,
                          backend=args.backend)
@@ -288,9 +290,9 @@ def _parser() -> argparse.ArgumentParser:
                            help="the first seed: the seeds are S .. S+N-1 (default 0)")
     reproduce.add_argument("--backend", default="mujoco", choices=("mujoco", "analytic"),
                            help="where rewards are computed: mujoco (default) or analytic (closed forms, quick)")
-    reproduce.add_argument("--jobs", type=whole_number, default=1, metavar="N",
-                           help="experiments run at once, each in its own process (1: one after another, "
-                                "with progress bars)")
+    reproduce.add_argument("--jobs", type=whole_number, default=None, metavar="N",
+                           help="experiments run at once, each in its own process (default: the number of "
+                                "cores; 1: one after another in this process, with progress bars)")
     reproduce.set_defaults(func=_cmd_reproduce)
 
     comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import platform
 import sys
 import time
@@ -30,7 +31,7 @@ from somarm.reproduce.sizes import check_seeds
 from somarm.tasks.base import BACKENDS
 from somarm.validation import check_int
 
-__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "check_request", "reproduce", "load_claims"]
+__all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "check_request", "default_jobs", "reproduce", "load_claims"]
 
 #: Every experiment of the paper, in the paper's order, then what goes beyond it.
 EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
@@ -59,6 +60,14 @@ def check_names(only: list[str] | None) -> list[str]:
     if "peers" in names and (reason := peers_missing()):
         raise ValueError(reason)
     return names
+
+
+def default_jobs() -> int:
+    """``--jobs`` when none is given: the cores this process may run on (a run's numbers do not depend on it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - platforms without affinity (macOS, Windows)
+        return max(1, os.cpu_count() or 1)
 
 
 def check_request(only: list[str] | None, *, quick: bool, seed: int, seeds: int, jobs: int,
@@ -90,7 +99,8 @@ def reproduce(
         sets, trained in lockstep); each claim's verdict then reads "holds in k of N seeds".
       backend: where every reward is computed, "mujoco" (default) or "analytic" (closed forms).
       jobs: experiments run at once, each in its own process (``somarm.reproduce.parallel``); 1
-        (default) runs them one after another in this process, with progress bars.
+        (default) runs them one after another in this process, with progress bars, as does a single
+        experiment (the command line's default is ``default_jobs``, the number of cores).
       final_out: the folder the report ends up in when the caller moves it there from ``out`` (a
         forced run writes into a staging folder first); the path printed at the end. Default ``out``.
 
@@ -118,7 +128,7 @@ def reproduce(
 
     experiments = {name: {**EXPERIMENTS, **OPTIONAL}[name] for name in names}
     try:
-        if jobs > 1:
+        if min(jobs, len(experiments)) > 1:  # one experiment alone runs here, with its progress bars
             from somarm.reproduce import parallel
 
             status = parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,

@@ -68,7 +68,7 @@ def test_unknown_experiment_lists_the_names(tmp_path):
 
 
 def test_ctrl_c_stops_the_whole_reproduction_and_keeps_finished_parts(tmp_path):
-    # reach2 (quick) finishes in seconds; the signal arrives during the much longer throw_maps.
+    # In this process (--jobs 1): reach2 (quick) finishes in seconds; the signal arrives during the much longer throw_maps.
     proc = subprocess.Popen(
         [
             sys.executable,
@@ -77,6 +77,8 @@ def test_ctrl_c_stops_the_whole_reproduction_and_keeps_finished_parts(tmp_path):
             "reproduce",
             "--quick",
             "--no-progress",
+            "--jobs",
+            "1",
             "--out",
             str(tmp_path),
             "--only",

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import pytest
 from processes import survivors_of_a_killed_parent
 
 from somarm.reproduce import runner
@@ -38,6 +39,22 @@ def test_workers_write_the_report_a_single_process_writes(tmp_path):
     assert figures and figures == sorted(p.name for p in (tmp_path / "two" / "figures").iterdir())
     for name in figures:
         assert (tmp_path / "one" / "figures" / name).read_bytes() == (tmp_path / "two" / "figures" / name).read_bytes()
+
+
+def test_jobs_default_to_the_cores_and_one_experiment_runs_in_this_process(tmp_path, monkeypatch):
+    from somarm import cli
+    from somarm.reproduce import parallel
+
+    asked = []
+    monkeypatch.setattr(runner, "reproduce", lambda out, **kwargs: asked.append(kwargs["jobs"]) or 0)
+    assert cli.main(["reproduce", "--quick", "--only", "throw", "--out", str(tmp_path / "a")]) == 0
+    assert cli.main(["reproduce", "--quick", "--only", "throw", "--jobs", "1", "--out", str(tmp_path / "b")]) == 0
+    assert asked == [len(os.sched_getaffinity(0)), 1] and runner.default_jobs() == asked[0]
+    monkeypatch.undo()
+    # More jobs than experiments: the one experiment runs here (no worker process to start).
+    monkeypatch.setattr(parallel, "run", lambda *args, **kwargs: pytest.fail("a worker for one experiment"))
+    assert runner.reproduce(tmp_path / "c", quick=True, only=["throw"], progress=False, backend="analytic",
+                            jobs=2) == 0
 
 
 def test_ctrl_c_stops_every_worker_and_keeps_the_finished_experiments(tmp_path):
@@ -102,7 +119,7 @@ def test_a_killed_parent_leaves_no_worker_running(tmp_path):
     # group shared with a process of the worker's own) must still stop within seconds, all of it.
     proc = subprocess.Popen(
         [sys.executable, "-m", "somarm.cli", "reproduce", "--jobs", "2", "--out", str(tmp_path),
-         "--only", "more_inputs"],
+         "--only", "more_inputs", "reach20"],  # two: one alone would run in the parent
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_ENV,
     )
     try:
