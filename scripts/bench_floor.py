@@ -5,16 +5,21 @@ Three measurements, each in one run on this machine:
 1. ``dm_env``: a throw episode of ``tasks.load`` against its MuJoCo part alone (the throw's own RK4
    steps in one native ``mj_step`` call on the launcher model, no Python per step). If the MuJoCo
    part alone is above the 100 us target, no glue can meet it.
-2. ``steps``: a training step's throws of 100 and of 20 trials, as the tasks cut them, timed in the
-   native rollouts alone, as a multiple of a large batch's cost per throw (the targets: 2x and 4x).
+2. ``steps``: MuJoCo's CPU per projectile-step (the thread CPU of the native rollouts over the RK4
+   steps the throws need) in a training step of 20 and of 100 trials and in a large batch, for the
+   tasks' design (a batch in one model, landed throws leaving: the staircase) beside the chunked
+   design before it (``somarm.benchmarks.flights``); and each step's cost per throw (the
+   flights alone, planned beforehand) as a multiple of the large batch's (the target: 1.5x at 100).
 3. ``paper``: the paper's experiments one after another (lanes as usual, no worker processes), with
    the CPU seconds of every thread spent in MuJoCo's native calls and in the learners' compiled
-   kernels. Their sum over the machine's 2 cores is a floor that no scheduling or glue can beat
-   (the target: the whole paper in 120 s).
+   kernels. Their sum over the machine's 2 cores is a floor that no scheduling or glue can beat.
+   ``--compare`` runs them a second time with the chunked flights and full-size arm models (the
+   design before), for MuJoCo's CPU side by side.
 
 Usage:
-  python scripts/bench_floor.py                   # all three (the paper part takes about 5 minutes)
+  python scripts/bench_floor.py                   # all three (the paper part takes a few minutes)
   python scripts/bench_floor.py --skip-paper      # the first two only (about a minute)
+  python scripts/bench_floor.py --compare         # the paper part under both designs
   python scripts/bench_floor.py --quick           # reduced sizes and the --quick experiments
 """
 
@@ -37,8 +42,8 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from somarm import tasks  # noqa: E402
-from somarm.benchmarks import best_seconds  # noqa: E402
-from somarm.learners import somq
+from somarm.benchmarks import best_seconds, flights  # noqa: E402
+from somarm.learners import somq  # noqa: E402
 from somarm.reproduce import common, runner  # noqa: E402
 from somarm.tasks import arms, flight  # noqa: E402
 from somarm.tasks.assets import model_path  # noqa: E402
@@ -59,9 +64,9 @@ def _throws(name: str, n: int, rng: np.random.Generator) -> dict[str, np.ndarray
 
 
 def _plan(t: dict[str, np.ndarray], part: slice = slice(None)):
-    """The tasks' own plan of these throws in one thread (steps, sorting, chunks; ``flight._plan``)."""
+    """The tasks' own plan of these throws in one thread (steps, sorting, groups; ``flight._plan``)."""
     return flight._plan(*(t[key][part] for key in ("ux", "uy", "Fr", "W", "M")), G=0.05,
-                        tolerance=flight.DEFAULT_TOLERANCE, workers=1, chunk=flight._CHUNK)
+                        tolerance=flight.DEFAULT_TOLERANCE, workers=1)
 
 
 def dm_env_floor(episodes: int, repeats: int) -> None:
@@ -94,27 +99,59 @@ def dm_env_floor(episodes: int, repeats: int) -> None:
               f"{'below' if min(floor_us, bare_us) <= 100 else 'ABOVE'} the target")
 
 
-def step_floor(large: int, steps: int, repeats: int) -> None:
-    """Part 2: the native rollouts of 100- and 20-trial steps as multiples of a large batch."""
-    print("training steps: native rollouts alone, cost per throw as a multiple of a large batch "
-          "(targets <= 2x at 100 trials, <= 4x at 20)")
+#: The two designs of a batch's flights, each a function of the tasks' plan: landings in flight order.
+DESIGNS = {"staircase": lambda plan: flight._fly(plan, 0.05),
+           "chunked": lambda plan: flights.fly_sorted(plan.flat, 0.05)}
+
+
+def _measure(plans, fly, repeats: int) -> tuple[float, float, float]:
+    """Best of ``repeats``: seconds of the flights, MuJoCo's CPU per needed projectile-step in
+    microseconds, and the body-steps MuJoCo took per needed projectile-step."""
+    needed = sum(float(plan.flat[-1].sum()) for plan in plans)
+    for plan in plans[:3]:  # this thread's models are built here, outside the timing
+        fly(plan)
+    best = (np.inf, np.inf, np.inf)
+    for _ in range(repeats):
+        with flights.RolloutClock() as clock:
+            start = time.perf_counter()
+            for plan in plans:
+                fly(plan)
+            seconds = time.perf_counter() - start
+        best = min(best, (seconds, clock.us_per_projectile_step(needed), clock.body_steps / needed))
+    return best
+
+
+def step_floor(large: int, steps: int, repeats: int) -> dict[str, dict]:
+    """Part 2: MuJoCo's CPU per projectile-step in both designs, and steps as multiples of a large batch.
+
+    Returns:
+      Per task, per design and batch size (20, 100, ``large``): ``us_per_projectile_step``,
+      ``body_steps_per_projectile_step`` and ``us_per_throw`` (the flights, wall time).
+    """
+    print("training steps and a large batch, one thread: MuJoCo's CPU per projectile-step (its native rollouts "
+          "over the RK4 steps the throws need; in brackets the steps MuJoCo took per needed one), and the flights' "
+          "cost per throw as a multiple of the large batch's (target <= 1.5x at 100 trials)")
+    print(f"  {'task':15s} {'throws':>6s}   {'staircase':>16s}   {'chunked':>16s}   {'chunked/staircase':>17s}   "
+          f"{'x large':>7s}")
+    figures: dict[str, dict] = {}
     for name in THROWS:
         t = _throws(name, large, np.random.default_rng(1))
-        def batch(t=t):
-            flight.landing_x(t["ux"], t["uy"], G=0.05, Fr=t["Fr"], W=t["W"], M=t["M"])
-
-        big = best_seconds(batch, repeats) / large
-        line = f"  {name:15s} large batch {big * 1e6:5.1f} us/throw"
-        for n in (100, 20):
-            plans = [_plan(t, slice(j * n, (j + 1) * n)) for j in range(steps)]
-
-            def native(plans=plans):
-                for plan in plans:
-                    flight._fly(plan, 0.05)
-
-            per_throw = best_seconds(native, repeats) / (steps * n)
-            line += f"   {n}: {per_throw * 1e6:5.1f} us/throw = {per_throw / big:4.2f}x"
-        print(line)
+        figures[name] = {}
+        for n, count in ((20, steps), (100, steps), (large, 1)):
+            plans = [_plan(t, slice(j * n, (j + 1) * n)) for j in range(count)]
+            row = {design: _measure(plans, fly, repeats) for design, fly in DESIGNS.items()}
+            figures[name][n] = {design: {"us_per_projectile_step": us, "body_steps_per_projectile_step": ratio,
+                                         "us_per_throw": seconds / (n * count) * 1e6}
+                                for design, (seconds, us, ratio) in row.items()}
+        big = figures[name][large]["staircase"]["us_per_throw"]
+        for n in (20, 100, large):
+            f = figures[name][n]
+            cells = "   ".join(f"{f[d]['us_per_projectile_step']:6.3f} us ({f[d]['body_steps_per_projectile_step']:4.2f})"
+                               for d in DESIGNS)
+            ratio = f["chunked"]["us_per_projectile_step"] / f["staircase"]["us_per_projectile_step"]
+            print(f"  {name:15s} {n:6d}   {cells}   {ratio:16.2f}x   {f['staircase']['us_per_throw'] / big:6.2f}x",
+                  flush=True)
+    return figures
 
 
 class _Clock:
@@ -158,13 +195,27 @@ def _clocked():
         flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS = saved
 
 
-def paper_floor(quick: bool, cores: int, names: tuple[str, ...] = PAPER) -> dict[str, float]:
+@contextlib.contextmanager
+def _chunked_design():
+    """Within the block the tasks fly their throws in chunks and their arms in models of the most arms
+    (the design before the staircase and the arm models sized to the batch); the same numbers."""
+    saved = (flight._fly, arms._batch)
+    sized = arms._batch
+    flight._fly = lambda plan, G: flights.fly_sorted(plan.flat, G)
+    arms._batch = lambda n_links, m: sized(n_links, arms._COPIES[n_links])
+    try:
+        yield
+    finally:
+        flight._fly, arms._batch = saved
+
+
+def paper_floor(quick: bool, cores: int, names: tuple[str, ...] = PAPER, label: str = "") -> dict[str, float]:
     """Part 3: the experiments with the CPU seconds of MuJoCo and of the learners' kernels.
 
     Returns:
       The totals: ``wall``, ``mujoco`` and ``kernels`` seconds, and the ``floor`` on ``cores``.
     """
-    print(f"the paper's experiments{' (--quick)' if quick else ''}, one after another: wall time and the "
+    print(f"the paper's experiments{' (--quick)' if quick else ''}{label}, one after another: wall time and the "
           "CPU seconds of all threads in MuJoCo's native calls and in the learners' kernels")
     totals = defaultdict(float)
     with _clocked() as clock, tempfile.TemporaryDirectory() as folder:
@@ -177,14 +228,25 @@ def paper_floor(quick: bool, cores: int, names: tuple[str, ...] = PAPER) -> dict
             spent = {k: clock.seconds[k] - before.get(k, 0.0) for k in ("mujoco", "kernels")}
             for key, value in (("wall", wall), *spent.items()):
                 totals[key] += value
+            totals[f"mujoco:{name}"] = spent["mujoco"]
             print(f"  {name:16s} wall {wall:7.1f} s   MuJoCo {spent['mujoco']:7.1f} s   kernels "
                   f"{spent['kernels']:6.1f} s", flush=True)
     totals["floor"] = (totals["mujoco"] + totals["kernels"]) / cores
     print(f"  {'all':16s} wall {totals['wall']:7.1f} s   MuJoCo {totals['mujoco']:7.1f} s   kernels "
           f"{totals['kernels']:6.1f} s")
-    print(f"  floor on {cores} cores, MuJoCo and kernels perfectly shared, nothing else: {totals['floor']:.1f} s "
-          f"(target 120 s; {totals['floor'] / 120:.0%} of it)")
+    print(f"  floor on {cores} cores, MuJoCo and kernels perfectly shared, nothing else: {totals['floor']:.1f} s")
     return dict(totals)
+
+
+def compare_paper(quick: bool, cores: int, names: tuple[str, ...] = PAPER) -> tuple[dict, dict]:
+    """Part 3 under both designs, one after the other, and MuJoCo's CPU of each experiment side by side."""
+    new = paper_floor(quick, cores, names, label=" (the staircase)")
+    with _chunked_design():
+        old = paper_floor(quick, cores, names, label=" (the chunked design)")
+    print("  MuJoCo's CPU, chunked design / staircase: " + ", ".join(
+        f"{name} {old[f'mujoco:{name}'] / new[f'mujoco:{name}']:.2f}x" for name in names if new[f"mujoco:{name}"] > 0)
+        + f"; all {old['mujoco'] / new['mujoco']:.2f}x")
+    return new, old
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -192,16 +254,21 @@ def main(argv: list[str] | None = None) -> int:
     parser = OneLineParser(prog="bench_floor.py", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes and the --quick experiments")
     parser.add_argument("--skip-paper", action="store_true", help="only the dm_env and training-step parts")
+    parser.add_argument("--compare", action="store_true", help="the paper part under both designs")
     try:
         args = parser.parse_args(argv)
     except ValueError as exc:
-        print(f"bench_floor.py: error: {exc} (allowed: --quick, --skip-paper)", file=sys.stderr)
+        print(f"bench_floor.py: error: {exc} (allowed: --quick, --skip-paper, --compare)", file=sys.stderr)
         return 2
     repeats = 1 if args.quick else 4
     dm_env_floor(episodes=50 if args.quick else 400, repeats=repeats)
     step_floor(large=6000 if args.quick else 60_000, steps=5 if args.quick else 60, repeats=repeats)
     if not args.skip_paper:
-        paper_floor(args.quick, cores=os.cpu_count() or 2)
+        cores = os.cpu_count() or 2
+        if args.compare:
+            compare_paper(args.quick, cores)
+        else:
+            paper_floor(args.quick, cores)
     return 0
 
 

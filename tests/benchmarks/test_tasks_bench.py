@@ -23,6 +23,14 @@ def test_quick_benchmark_prints_a_row_per_task(capsys, tmp_path):
         assert all(f[key] > 0 for key in ("mujoco_per_s", "step100_ms", "step20_ms", "dm_env_us"))
         # The printed ratio is the step's cost per evaluation over the large batch's.
         assert f["step100_x_batch"] == pytest.approx(f["step100_ms"] / 1e3 / 100 * f["mujoco_per_s"])
+    # MuJoCo's CPU per projectile-step (the throws', not the arms'): some, and per throw not more than
+    # the large batch's time on its threads.
+    throw = figures["throw"]
+    assert "mujoco_us_per_projectile_step" not in figures["reach2"] and throw["projectile_steps_per_throw"] >= 1
+    cpu_per_throw = throw["mujoco_us_per_projectile_step"] * 1e-6 * throw["projectile_steps_per_throw"]
+    assert 0.0 < cpu_per_throw <= 2 / throw["mujoco_per_s"]
+    assert float(rows["throw"][10]) == pytest.approx(throw["mujoco_us_per_projectile_step"], abs=1e-3)
+    assert rows["reach2"][10] == "-"
 
 
 def test_json_into_a_missing_folder_fails_before_measuring(tmp_path):
