@@ -22,7 +22,6 @@ import time
 import types
 from typing import NamedTuple
 
-import numba
 import numpy as np
 
 from somarm.tasks import flight
@@ -67,8 +66,7 @@ class RolloutClock:
         """Microseconds of MuJoCo per RK4 step the throws need (``needed``: their model steps summed)."""
         return self.seconds / needed * 1e6
 
-#: The chunked design's cost model, in projectile-steps: a fixed cost per model step and per call.
-_STEP_COST = 7.0
+#: The chunked design's cost of a chunk's native call, in projectile-steps, and its most throws per model.
 _CALL_COST = 40.0
 _CAP = 256
 
@@ -81,33 +79,10 @@ class ChunkedPlan(NamedTuple):
     chunks: list
 
 
-@numba.njit(cache=True)
-def _cut(steps, size_of, cap, step_cost, call_cost):
-    """Cheapest cut of ascending flights into chunks of at most ``cap``: each prefix's best last-chunk start."""
-    n = steps.shape[0]
-    best = np.empty(n + 1)
-    best[0] = 0.0
-    start = np.zeros(n + 1, np.int64)
-    for b in range(1, n + 1):
-        lowest = np.inf
-        for a in range(max(0, b - cap), b):
-            cost = best[a] + call_cost + steps[b - 1] * (step_cost + size_of[b - a])
-            if cost < lowest:
-                lowest = cost
-                start[b] = a
-        best[b] = lowest
-    return start
-
-
 def cut(steps: np.ndarray) -> list[tuple[int, int]]:
-    """The chunks ``(start, stop)`` of flights of ascending model steps (``flight._model_steps``)."""
-    start = _cut(np.asarray(steps, dtype=np.float64), flight._SIZE_OF, _CAP, _STEP_COST, _CALL_COST)
-    chunks = []
-    stop = len(steps)
-    while stop > 0:
-        chunks.append((int(start[stop]), stop))
-        stop = chunks[-1][0]
-    return chunks[::-1]
+    """The chunks ``(start, stop)`` of flights of ascending model steps (``flight._model_steps``):
+    the tasks' cut into chunks of similar flights, under the chunked design's cost per chunk."""
+    return flight._chunks(steps, _CAP, _CALL_COST)
 
 
 def plan(ux, uy, Fr, W, M, *, G: float = 0.05, tolerance: float = flight.DEFAULT_TOLERANCE) -> ChunkedPlan:

@@ -37,10 +37,10 @@ that have landed are located and leave: the rest go on from their state in a mod
 size. So a throw pays for its own steps, and the batch pays MuJoCo's fixed cost per model step
 once per step of its longest flight, not once per group of similar flights. Where the segments end
 is chosen by dynamic programming over a cost model (``_stairs``). A batch of more than ``cap``
-throws (or one that two threads finish sooner) is cut into groups of similar flights, each its
-own staircase; groups are shared between threads, each with its own models, and MuJoCo releases
-the GIL while it steps. Moving a throw between models copies its state exactly, so it lands
-where it lands alone.
+throws is cut into chunks of similar flights (``_chunks``), and one that two threads finish
+sooner is split in two, each group its own staircase; groups are shared between threads, each
+with its own models, and MuJoCo releases the GIL while it steps. Moving a throw between models
+copies its state exactly, so it lands where it lands alone.
 """
 
 from __future__ import annotations
@@ -534,25 +534,63 @@ def _fly_stairs(arrays, out: np.ndarray, G: float) -> None:
     raise RuntimeError(f"projectile(s) still flying after {begin} steps")  # pragma: no cover - planned away
 
 
+@numba.njit(cache=True)
+def _cut(steps, size_of, cap, step_cost, chunk_cost):
+    """Cheapest cut of ascending flights into chunks of at most ``cap`` (dynamic programming).
+
+    A chunk ``[a, b)`` costs ``chunk_cost + steps[b - 1] * (step_cost + size_of[b - a])``: its
+    set-up, then its longest flight's steps, each a fixed cost plus one per projectile of its
+    model. Returns each prefix's best last-chunk start (``start[b]`` for the chunk ending at b).
+    """
+    n = steps.shape[0]
+    best = np.empty(n + 1)
+    best[0] = 0.0
+    start = np.zeros(n + 1, np.int64)
+    for b in range(1, n + 1):
+        lowest = np.inf
+        for a in range(max(0, b - cap), b):
+            cost = best[a] + chunk_cost + steps[b - 1] * (step_cost + size_of[b - a])
+            if cost < lowest:
+                lowest = cost
+                start[b] = a
+        best[b] = lowest
+    return start
+
+
+def _chunks(steps: np.ndarray, cap: int, chunk_cost: float = _SEGMENT_COST) -> list[tuple[int, int]]:
+    """Flights of ascending model steps cut into chunks ``(start, stop)`` of similar flights, at most
+    ``cap`` each: the cheapest cut if every chunk flew side by side to its longest flight (``_cut``)."""
+    start = _cut(np.asarray(steps, dtype=np.float64), _SIZE_OF, max(1, min(int(cap), _SIZES[-1])), _STEP_COST,
+                 chunk_cost)
+    chunks = []
+    stop = len(steps)
+    while stop > 0:
+        chunks.append((int(start[stop]), stop))
+        stop = chunks[-1][0]
+    return chunks[::-1]
+
+
 def _groups(steps: np.ndarray, cap: int, workers: int) -> tuple[list[list[tuple[int, int]]], float]:
     """Contiguous groups of the sorted flights, each a staircase, shared between up to ``workers`` threads.
 
-    A batch of more than ``cap`` throws is cut into groups of about equal work (model steps); with
-    several threads, a cut into one group per thread is tried too, and kept if it ends sooner by
-    more than handing work to another thread costs (``_THREAD_COST``).
+    A batch of up to ``cap`` throws is one group; a larger one is cut into chunks of similar
+    flights of at most ``cap`` (``_chunks``), each its own staircase. The groups are shared out
+    longest first (by ``_stairs``' cost). With several threads a batch of up to ``cap`` is also
+    tried split into one group per thread of about equal work (model steps), kept if it ends
+    sooner by more than handing work to another thread costs (``_THREAD_COST``).
 
     Returns:
       The groups ``(start, stop)`` of each thread, and the longest thread's cost.
     """
     n = len(steps)
-    counts = sorted({max(1, -(-n // cap)), *((workers,) if workers > 1 and n > 1 else ())})
-    best: tuple[list[list[tuple[int, int]]], float] | None = None
-    for count in counts:
+    candidates = [[(0, n)] if n <= cap else _chunks(steps, cap)]
+    if workers > 1 and 1 < n <= cap:
         work = np.cumsum(steps)
-        cuts = np.searchsorted(work, work[-1] * np.arange(1, count) / count, side="right")
-        bounds = [int(b) for b in (0, *cuts, n)]
-        groups = [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
-        groups = [piece for a, b in groups for piece in _within_cap(a, b, cap)]
+        cuts = np.searchsorted(work, work[-1] * np.arange(1, workers) / workers, side="right")
+        bounds = [0, *(int(c) for c in cuts), n]
+        candidates.append([(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a])
+    best: tuple[list[list[tuple[int, int]]], float] | None = None
+    for groups in candidates:
         costs = [_stairs(steps[a:b])[2] for a, b in groups]
         shares: list[list[tuple[int, int]]] = [[] for _ in range(min(workers, len(groups)))]
         load = [0.0] * len(shares)
@@ -564,13 +602,6 @@ def _groups(steps: np.ndarray, cap: int, workers: int) -> tuple[list[list[tuple[
         if best is None or finish < best[1]:
             best = (shares, finish)
     return best
-
-
-def _within_cap(a: int, b: int, cap: int) -> list[tuple[int, int]]:
-    """``[a, b)`` in equal pieces of at most ``cap``."""
-    pieces = -(-(b - a) // cap)
-    bounds = np.linspace(a, b, pieces + 1).round().astype(int)
-    return [(int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def _run_groups(groups: list[tuple[int, int]], arrays, out: np.ndarray, G: float) -> None:

@@ -109,6 +109,28 @@ def test_the_staircase_is_the_cheapest_and_ends_its_segments_between_flights_of_
     assert flight._stairs(steps)[2] < _staircase_cost(steps, [200])
 
 
+def test_a_large_batch_is_cut_into_the_cheapest_chunks_of_similar_flights():
+    rng = np.random.default_rng(0)
+
+    def cost(steps, chunks):
+        return sum(flight._SEGMENT_COST + steps[b - 1] * (flight._STEP_COST + flight._model_size(b - a))
+                   for a, b in chunks)
+
+    for n, cap in ((1, 256), (20, 256), (3000, 256), (50, 8)):
+        steps = np.sort(rng.integers(1, 160, n)).astype(float)
+        chunks = flight._chunks(steps, cap)
+        assert chunks[0][0] == 0 and chunks[-1][1] == n
+        assert all(a < b <= a + cap for a, b in chunks)
+        assert all(b == a2 for (_, b), (a2, _) in zip(chunks, chunks[1:], strict=False))
+    for n in (1, 5, 9):  # every cut, by brute force: none is cheaper
+        steps = np.sort(rng.integers(1, 60, n)).astype(float)
+        every = []
+        for mask in range(2 ** (n - 1)):  # bit i set: a cut after flight i
+            cuts = [0] + [i + 1 for i in range(n - 1) if mask >> i & 1] + [n]
+            every.append(cost(steps, list(zip(cuts, cuts[1:], strict=False))))
+        assert cost(steps, flight._chunks(steps, 256)) == pytest.approx(min(every))
+
+
 def test_groups_cover_the_batch_once_within_the_cap_over_the_threads():
     rng = np.random.default_rng(3)
     for n, cap, workers in ((1, 256, 2), (20, 256, 2), (100, 256, 2), (600, 256, 1), (1000, 256, 3), (50, 8, 2)):
