@@ -105,18 +105,18 @@ DESIGNS = {"staircase": lambda plan: flight._fly(plan, 0.05),
 
 
 def _measure(plans, fly, repeats: int) -> tuple[float, float, float]:
-    """Best of ``repeats``: seconds of the flights, MuJoCo's CPU per needed projectile-step in
-    microseconds, and the body-steps MuJoCo took per needed projectile-step."""
+    """Best of ``repeats``: CPU seconds of the flights (this thread's), MuJoCo's CPU per needed
+    projectile-step in microseconds, and the body-steps MuJoCo took per needed projectile-step."""
     needed = sum(float(plan.flat[-1].sum()) for plan in plans)
     for plan in plans[:3]:  # this thread's models are built here, outside the timing
         fly(plan)
     best = (np.inf, np.inf, np.inf)
     for _ in range(repeats):
         with flights.RolloutClock() as clock:
-            start = time.perf_counter()
+            start = time.thread_time()  # CPU, not wall: a busy machine's waits left out
             for plan in plans:
                 fly(plan)
-            seconds = time.perf_counter() - start
+            seconds = time.thread_time() - start
         best = min(best, (seconds, clock.us_per_projectile_step(needed), clock.body_steps / needed))
     return best
 
@@ -126,11 +126,11 @@ def step_floor(large: int, steps: int, repeats: int) -> dict[str, dict]:
 
     Returns:
       Per task, per design and batch size (20, 100, ``large``): ``us_per_projectile_step``,
-      ``body_steps_per_projectile_step`` and ``us_per_throw`` (the flights, wall time).
+      ``body_steps_per_projectile_step`` and ``us_per_throw`` (the flights' CPU).
     """
     print("training steps and a large batch, one thread: MuJoCo's CPU per projectile-step (its native rollouts "
           "over the RK4 steps the throws need; in brackets the steps MuJoCo took per needed one), and the flights' "
-          "cost per throw as a multiple of the large batch's (target <= 1.5x at 100 trials)")
+          "CPU per throw as a multiple of the large batch's (target <= 1.5x at 100 trials)")
     print(f"  {'task':15s} {'throws':>6s}   {'staircase':>16s}   {'chunked':>16s}   {'chunked/staircase':>17s}   "
           f"{'x large':>7s}")
     figures: dict[str, dict] = {}
