@@ -155,13 +155,13 @@ def step_floor(large: int, steps: int, repeats: int) -> dict[str, dict]:
 
 
 class _Clock:
-    """CPU seconds of every thread inside wrapped functions, by kind."""
+    """CPU seconds of every thread inside wrapped functions, by kind (a call may count for several)."""
 
     def __init__(self) -> None:
         self.lock = threading.Lock()
         self.seconds: dict[str, float] = defaultdict(float)
 
-    def wrap(self, kind: str, fn):
+    def wrap(self, kinds: tuple[str, ...], fn):
         def timed(*args, **kwargs):
             start = time.thread_time()
             try:
@@ -169,8 +169,17 @@ class _Clock:
             finally:
                 spent = time.thread_time() - start
                 with self.lock:
-                    self.seconds[kind] += spent
+                    for kind in kinds:
+                        self.seconds[kind] += spent
         return timed
+
+    def count(self, fly):
+        """``flight._fly`` that also adds the RK4 steps its throws need to ``seconds["projectile_steps"]``."""
+        def counted(plan, G):
+            with self.lock:
+                self.seconds["projectile_steps"] += float(plan.flat[-1].sum())
+            return fly(plan, G)
+        return counted
 
 
 def _proxy(module, **wrapped) -> types.SimpleNamespace:
@@ -183,16 +192,18 @@ def _proxy(module, **wrapped) -> types.SimpleNamespace:
 def _clocked():
     """A ``_Clock`` on MuJoCo's native calls and the learners' kernels, every group in this process."""
     clock = _Clock()
-    saved = (flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS)
-    flight.mj_rollout = _proxy(flight.mj_rollout, rollout=clock.wrap("mujoco", flight.mj_rollout.rollout))
-    arms.mujoco = _proxy(mujoco, mj_kinematics=clock.wrap("mujoco", mujoco.mj_kinematics))
-    somq._kernels = _proxy(somq._kernels, act_kernel=clock.wrap("kernels", somq._kernels.act_kernel),
-                           learn_kernel=clock.wrap("kernels", somq._kernels.learn_kernel))
+    saved = (flight.mj_rollout, flight._fly, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS)
+    flight.mj_rollout = _proxy(flight.mj_rollout,
+                               rollout=clock.wrap(("mujoco", "flights"), flight.mj_rollout.rollout))
+    flight._fly = clock.count(flight._fly)
+    arms.mujoco = _proxy(mujoco, mj_kinematics=clock.wrap(("mujoco",), mujoco.mj_kinematics))
+    somq._kernels = _proxy(somq._kernels, act_kernel=clock.wrap(("kernels",), somq._kernels.act_kernel),
+                           learn_kernel=clock.wrap(("kernels",), somq._kernels.learn_kernel))
     common.SPLIT_TRIAL_STEPS = float("inf")  # no worker processes: the clock sees every group
     try:
         yield clock
     finally:
-        flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS = saved
+        flight.mj_rollout, flight._fly, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS = saved
 
 
 @contextlib.contextmanager
@@ -225,17 +236,27 @@ def paper_floor(quick: bool, cores: int, names: tuple[str, ...] = PAPER, label: 
             with contextlib.redirect_stdout(io.StringIO()):  # the runner's own lines
                 runner.reproduce(Path(folder) / name, quick=quick, only=[name], progress=False)
             wall = time.perf_counter() - start
-            spent = {k: clock.seconds[k] - before.get(k, 0.0) for k in ("mujoco", "kernels")}
+            spent = {k: clock.seconds[k] - before.get(k, 0.0)
+                     for k in ("mujoco", "kernels", "flights", "projectile_steps")}
             for key, value in (("wall", wall), *spent.items()):
                 totals[key] += value
             totals[f"mujoco:{name}"] = spent["mujoco"]
             print(f"  {name:16s} wall {wall:7.1f} s   MuJoCo {spent['mujoco']:7.1f} s   kernels "
-                  f"{spent['kernels']:6.1f} s", flush=True)
+                  f"{spent['kernels']:6.1f} s{_flights_line(spent)}", flush=True)
     totals["floor"] = (totals["mujoco"] + totals["kernels"]) / cores
     print(f"  {'all':16s} wall {totals['wall']:7.1f} s   MuJoCo {totals['mujoco']:7.1f} s   kernels "
-          f"{totals['kernels']:6.1f} s")
+          f"{totals['kernels']:6.1f} s{_flights_line(totals)}")
     print(f"  floor on {cores} cores, MuJoCo and kernels perfectly shared, nothing else: {totals['floor']:.1f} s")
     return dict(totals)
+
+
+def _flights_line(spent: dict[str, float]) -> str:
+    """What the throws' flights took of MuJoCo's time: its seconds, the RK4 steps the throws needed
+    and the microseconds per step ("" without throws)."""
+    if not spent["projectile_steps"]:
+        return ""
+    return (f"   (flights {spent['flights']:.1f} s for {spent['projectile_steps'] / 1e6:.1f}M projectile-steps, "
+            f"{spent['flights'] / spent['projectile_steps'] * 1e6:.3f} us each)")
 
 
 def compare_paper(quick: bool, cores: int, names: tuple[str, ...] = PAPER) -> tuple[dict, dict]:

@@ -26,15 +26,16 @@ def _load():
 
 def test_the_clock_counts_mujoco_and_kernels_and_puts_everything_back(capsys):
     bench = _load()
-    saved = (flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS)
+    saved = (flight.mj_rollout, flight._fly, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS)
     with bench._clocked() as clock:
         assert common.SPLIT_TRIAL_STEPS == float("inf")
         task = tasks.make("throw_distance", n_trials=40)
         task.reset()
         task.step(np.full((40, 2), 0.6))
         arms.fingertips(np.zeros((10, 2)), 2)
-    assert clock.seconds["mujoco"] > 0.0 and clock.seconds["kernels"] == 0.0
-    assert (flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS) == saved
+    assert clock.seconds["mujoco"] > clock.seconds["flights"] > 0.0 and clock.seconds["kernels"] == 0.0
+    assert clock.seconds["projectile_steps"] >= 40  # the 40 throws' RK4 steps, at least one each
+    assert (flight.mj_rollout, flight._fly, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS) == saved
     totals = bench.paper_floor(True, 2, names=("throw",))
     out = capsys.readouterr().out
     assert "throw " in out and "floor on 2 cores" in out
@@ -42,10 +43,40 @@ def test_the_clock_counts_mujoco_and_kernels_and_puts_everything_back(capsys):
     assert 0.0 < totals["mujoco"] and 0.0 < totals["kernels"]
     assert totals["mujoco"] + totals["kernels"] <= 2 * totals["wall"]
     assert totals["floor"] == (totals["mujoco"] + totals["kernels"]) / 2
-    assert (flight.mj_rollout, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS) == saved
+    assert 0.0 < totals["flights"] <= totals["mujoco"] and "projectile-steps" in out
+    assert (flight.mj_rollout, flight._fly, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS) == saved
+
+
+def test_the_step_part_compares_the_designs_on_the_same_throws(capsys):
+    bench = _load()
+    figures = bench.step_floor(large=300, steps=2, repeats=1)
+    assert "chunked/staircase" in capsys.readouterr().out
+    for name in bench.THROWS:
+        for n in (20, 100, 300):
+            f = figures[name][n]
+            assert all(f[d]["us_per_projectile_step"] > 0 and f[d]["body_steps_per_projectile_step"] >= 0.9
+                       for d in bench.DESIGNS)
+        # A training step's throws: the staircase steps fewer bodies per step a throw needs than the chunks.
+        for n in (20, 100):
+            f = figures[name][n]
+            assert f["staircase"]["body_steps_per_projectile_step"] < f["chunked"]["body_steps_per_projectile_step"]
+
+
+def test_the_design_before_lands_the_same_and_is_put_back():
+    bench = _load()
+    saved = (flight._fly, arms._batch)
+    rng = np.random.default_rng(2)
+    ux, uy, angles = rng.random(50), rng.random(50), rng.uniform(-3.0, 3.0, (20, 2))
+    now = flight.landing_x(ux, uy), arms.fingertips(angles, 2)
+    with bench._chunked_design():
+        assert (flight._fly, arms._batch) != saved and arms._batch(2, 20).copies == arms._COPIES[2]
+        before = flight.landing_x(ux, uy), arms.fingertips(angles, 2)
+    assert (flight._fly, arms._batch) == saved
+    for a, b in zip(now, before, strict=True):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_a_bad_option_is_one_line(capsys):
     assert _load().main(["--fast"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--fast" in err and "--quick" in err
+    assert err.count("\n") == 1 and "--fast" in err and "--quick" in err and "--compare" in err
