@@ -296,10 +296,45 @@ def _obstacle() -> Preset:
     )
 
 
+def _benchmark(name: str, env_id: str, changes: dict[str, object], why: tuple[str, ...], *,
+               n_trials: int, n_steps: int) -> Preset:
+    """A preset for a Gymnasium benchmark (``gym:ID``): every value is this project's, chosen on seeds
+    that the reports do not use; the observations arrive scaled to [0, 1] (``tasks.gym_envs``)."""
+    f = InverseDecay(n_steps / 20)
+    config = SOMQConfig(
+        input_shape=(20, 20),
+        action_shape=(9,),
+        alpha=Schedule(1.0, f, 0.1),
+        lambda_s=Schedule(1.0, f, 0.01),
+        lambda_a=Schedule(1.0, f, 0.05),
+        n_s=Schedule(3.0, f),
+        n_a=Schedule(1.0, f),
+        p=Schedule(1.0, f, 0.1),
+        epsilon=Schedule(0.5, f, 0.05),
+        gamma=0.98,
+        epsilon_relative=True,
+        input_init=(0.0, 1.0),
+    )
+    return Preset(name, f"beyond the paper: gym:{env_id}, Gymnasium's benchmark", dataclasses.replace(config, **changes),
+                  f"gym:{env_id}", "none (the report's benchmarks part)", n_trials, None, n_steps=n_steps,
+                  choices=("every value is this project's: the paper ran no Gymnasium environment", *why))
+
+
+def _benchmarks() -> tuple[Preset, ...]:
+    return (
+        _benchmark("gym", "ID", {}, ("the generic start for any gym:ID: a 20x20 input map over the scaled "
+                                     "observations, 9 action units, gamma 0.98",), n_trials=5, n_steps=100_000),
+        _benchmark("pendulum", "Pendulum-v1", {}, (), n_trials=5, n_steps=200_000),
+        _benchmark("mountaincar", "MountainCarContinuous-v0", {"gamma": 0.99}, (), n_trials=5, n_steps=200_000),
+        _benchmark("invertedpendulum", "InvertedPendulum-v5", {"gamma": 0.99}, (), n_trials=5, n_steps=100_000),
+        _benchmark("reacher", "Reacher-v5", {"gamma": 0.9}, (), n_trials=5, n_steps=200_000),
+    )
+
+
 PRESETS: dict[str, Preset] = {
     p.name: p
     for p in (_table1(), _table2(), _table4(), _table5(), _table7("table7"), _table7("table7a"), _table1_plus(),
-              _table5_plus(), _obstacle())
+              _table5_plus(), _obstacle(), *_benchmarks())
 }
 
 

@@ -27,7 +27,7 @@ from somarm.reproduce import (
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section, claim_record, render
 from somarm.reproduce.sizes import check_seeds
-from somarm.tasks.base import BACKENDS
+from somarm.tasks.record import OWN_BACKENDS
 from somarm.validation import check_int
 
 __all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "check_request", "reproduce", "load_claims"]
@@ -72,8 +72,8 @@ def check_request(only: list[str] | None, *, quick: bool, seed: int, seeds: int,
     names = check_names(only)
     check_int("--seeds", seeds)
     check_int("--jobs", jobs)
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+    if backend not in OWN_BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(OWN_BACKENDS)}")
     check_seeds({n: {**EXPERIMENTS, **OPTIONAL}[n] for n in names}, quick=quick, seed=seed, seeds=seeds,
                 backend=backend)
     return names

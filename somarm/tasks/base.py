@@ -19,7 +19,7 @@ from dm_control.rl import control
 from dm_env import specs
 
 from somarm.streams import UniformStreams, trial_ids_for
-from somarm.tasks.record import BACKENDS
+from somarm.tasks.record import BACKENDS, OWN_BACKENDS
 from somarm.validation import real_array
 
 __all__ = ["Backend", "BACKENDS", "TaskBase", "OneStepTask", "OneStepEnvTask", "check_actions", "step_together"]
@@ -115,8 +115,8 @@ class OneStepTask(TaskBase):
 
     def __init__(self, params: Any, *, n_trials: int = 1, seed: int = 0,
                  trial_ids: np.ndarray | None = None, backend: Backend = "mujoco"):
-        if backend not in BACKENDS:
-            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
+        if backend not in OWN_BACKENDS:
+            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(OWN_BACKENDS)}")
         self.params = params
         self.backend = backend
         self.trial_ids = trial_ids_for(n_trials, trial_ids)

@@ -9,10 +9,11 @@ from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table5+"]
+BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
-    assert list(presets.PRESETS) == [*NAMES, "obstacle"]
+    assert list(presets.PRESETS) == [*NAMES, "obstacle", *BENCHMARKS]
     for name in NAMES:
         assert isinstance(presets.get(name), SOMQConfig)
         line = presets.describe(name)
