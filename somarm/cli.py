@@ -218,10 +218,11 @@ def _cmd_compare(args) -> int:
         seeds=args.seeds,
         seed=args.seed,
         observations=args.observations,
+        episodes=args.episodes,
         task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
     )
     compare.check(config)
-    out = _out_folder(args.out, f"compare/{config.task}")
+    out = _out_folder(args.out, f"compare/{config.task.replace(':', '-')}")
     owner = claim(out, force=args.force, what="a comparison")
     sigterm_as_interrupt()
     try:
@@ -294,11 +295,16 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.set_defaults(func=_cmd_reproduce)
 
     comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")
-    comp.add_argument("task", help="task name (see `somarm tasks`)")
-    comp.add_argument("--learners", default="somq,motoric,tabular,td3,sac",
-                      help="comma-separated, from somq, motoric, tabular, td3, sac (default: all five)")
+    comp.add_argument("task", help="task name (see `somarm tasks`), or gym:ID for a Gymnasium environment")
+    comp.add_argument("--learners", default="somq,somq+,motoric,tabular,td3,sac",
+                      help="comma-separated, from somq, somq+ (the task's + preset with the interpolated response), "
+                           "motoric, tabular, td3, sac (default: all six)")
     comp.add_argument("--samples", type=whole_number, default=10_000, help="training samples (default 10000)")
-    comp.add_argument("--peer-samples", type=whole_number, help="training samples of td3 and sac (default --samples)")
+    comp.add_argument("--peer-samples", type=whole_number,
+                      help="training samples of td3 and sac (default: RL Baselines3 Zoo's budget for a gym:ID it "
+                           "tunes, else --samples)")
+    comp.add_argument("--episodes", type=whole_number, default=100,
+                      help="fresh greedy episodes scored at the end, for gym:ID (a fifth at earlier rungs; default 100)")
     comp.add_argument("--seeds", type=whole_number, default=3, help="seeds S..S+K-1 for every learner (default 3)")
     comp.add_argument("--seed", type=whole_number, default=0, help="the first seed S (default 0)")
     comp.add_argument("--observations", type=whole_number, default=1000, help="fresh observations scored (1000)")

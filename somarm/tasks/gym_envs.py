@@ -94,6 +94,8 @@ def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
     gymnasium = _gymnasium()
     from gymnasium import error, spaces
 
+    if env_id.startswith("somarm/"):  # this project's one-step tasks as Gymnasium environments
+        import somarm.peers.gym  # noqa: F401  (registers the somarm/ ids)
     name = PREFIX + env_id
     try:
         env = gymnasium.make(env_id, **json.loads(kwargs_json))
