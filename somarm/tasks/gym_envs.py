@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.streams import trial_generators, trial_ids_for
+from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase, check_actions
 from somarm.tasks.record import TaskRecord
 
@@ -155,7 +155,7 @@ def estimate_bounds(params: GymParams, seed: int) -> tuple[tuple[float, ...], tu
     ``_ESTIMATE_STEPS`` observations under uniformly random actions (episodes reset with seeds of the
     run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite."""
     facts = describe(params.env_id, _kwargs_json(params))
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(5,))))
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["scaling"],))))
     env = params.make_env()
     seen = []
     try:
