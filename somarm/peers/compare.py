@@ -266,7 +266,7 @@ def _run_peer(kind: str, config: CompareConfig, seed: int, rungs: list[int], sco
     if config.task.startswith("gym:"):
         keywords, _, source = zoo.settings(kind, config.task[4:], env.action_space.shape[0])
     else:
-        keywords, source = {}, "SB3 defaults"
+        keywords, source = zoo.defaults(kind, env.action_space.shape[0])
     if warm_up:  # untimed: torch builds its kernels on the first gradient step
         algorithm("MlpPolicy", env, seed=seed, device="cpu", learning_starts=1, batch_size=2).learn(3)
     model = algorithm("MlpPolicy", env, seed=seed, device="cpu", **keywords)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PUBLISHED", "THRESHOLDS", "zoo_entry", "settings"]
+__all__ = ["PUBLISHED", "THRESHOLDS", "zoo_entry", "defaults", "settings"]
 
 #: RL Baselines3 Zoo's benchmark table: (algorithm, env) -> (mean return, sd, timesteps), as published.
 PUBLISHED: dict[tuple[str, str], tuple[float, float, int]] = {
@@ -71,6 +71,17 @@ def _policy_kwargs(text: str) -> dict[str, Any]:
     return {k.arg: ast.literal_eval(k.value) for k in tree.keywords}
 
 
+def defaults(kind: str, action_dim: int) -> tuple[dict[str, Any], str]:
+    """SB3's defaults, with Gaussian action noise of sd 0.1 for TD3 (SB3's TD3 adds none by default,
+    and without it TD3 explores only through its initial random steps), and their description."""
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    if kind == "td3":
+        return ({"action_noise": NormalActionNoise(np.zeros(action_dim), 0.1 * np.ones(action_dim))},
+                "SB3 defaults with Gaussian action noise 0.1")
+    return {}, "SB3 defaults"
+
+
 def settings(kind: str, env_id: str, action_dim: int) -> tuple[dict[str, Any], int | None, str]:
     """The keywords of ``stable_baselines3.TD3``/``SAC`` for ``env_id``, the Zoo's budget (None where
     the Zoo has no entry) and where they came from (``"rl-zoo3 <version>"`` or ``"SB3 defaults"``).
@@ -82,10 +93,8 @@ def settings(kind: str, env_id: str, action_dim: int) -> tuple[dict[str, Any], i
 
     entry = zoo_entry(kind, env_id)
     if entry is None:
-        keywords: dict[str, Any] = {}
-        if kind == "td3":
-            keywords["action_noise"] = NormalActionNoise(np.zeros(action_dim), 0.1 * np.ones(action_dim))
-        return keywords, None, "SB3 defaults" + (" with Gaussian action noise 0.1" if kind == "td3" else "")
+        keywords, source = defaults(kind, action_dim)
+        return keywords, None, source
     keywords = {key: value for key, value in entry.items() if key not in _NOT_KEYWORDS}
     if isinstance(keywords.get("policy_kwargs"), str):
         keywords["policy_kwargs"] = _policy_kwargs(keywords["policy_kwargs"])

@@ -51,10 +51,10 @@ def test_the_same_seed_gives_the_same_errors_for_somarm_learners(tmp_path):
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, motoric, tabular, td3, sac"),
+    (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, somq+, motoric, tabular, td3, sac"),
     (["reach20", "--learners", "tabular"], "tabular cannot learn reach20"),
     (["reach3"], "unknown task 'reach3'"),
-    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes the one-step tasks"),
+    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes gym:ID and the one-step tasks"),
     (["reach2", "--seeds", "0"], "seeds must be a whole number >= 1"),
 ])
 def test_bad_compare_arguments_end_in_one_line(argv, message, capsys, tmp_path):
@@ -79,7 +79,10 @@ def test_the_peers_part_is_optional_and_runs_when_named(tmp_path):
     claims = runner.load_claims(tmp_path)["experiments"]["peers"]["claims"]
     assert len(claims) == 2 and all(c["holds"] in (True, False) for c in claims)
     report = (tmp_path / "REPORT.md").read_text()
-    assert "| samples | SOM-Q | Motoric Map | tabular (fixed grid) | SB3 TD3 | SB3 SAC |" in report
+    assert ("| samples | SOM-Q | SOM-Q+ (interpolated) | Motoric Map | tabular (fixed grid) | SB3 TD3 | SB3 SAC |"
+            in report)
+    assert "| learner | error <= 0.05 | error <= 0.02 | error <= 0.01 |" in report
+    assert report.count("\n| SB3 TD3 | ") == 3  # a time-to-error row per task
     for task in ("reach2", "reach20", "throw_distance"):
         assert (tmp_path / "peers" / task / "compare.png").stat().st_size > 10_000
         assert f"![compare](peers/{task}/compare.png)" in report
