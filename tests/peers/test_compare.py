@@ -86,3 +86,35 @@ def test_the_peers_part_is_optional_and_runs_when_named(tmp_path):
     for task in ("reach2", "reach20", "throw_distance"):
         assert (tmp_path / "peers" / task / "compare.png").stat().st_size > 10_000
         assert f"![compare](peers/{task}/compare.png)" in report
+
+
+def test_compare_scores_a_gymnasium_environment_by_greedy_returns_with_the_zoos_settings(tmp_path):
+    config = compare.CompareConfig(task="gym:Pendulum-v1", learners=("somq", "td3"), samples=300, peer_samples=300,
+                                   seeds=1, episodes=5)
+    result = compare.compare(config, tmp_path, progress=False)
+    assert result["metric"] == "return" and result["episodes"] == 5
+    assert -2000 < result["random_action_return"] < -500  # Pendulum's random torques
+    for kind in ("somq", "td3"):
+        returns = np.array(result["learners"][kind]["return"])
+        assert returns.shape == (len(compare.ladder(300)), 1) and np.all((returns < 0) & (returns > -2000))
+    td3 = result["learners"]["td3"]["settings"]
+    assert td3["source"].startswith("rl-zoo3 ") and "400, 300" in td3["net_arch"] and td3["gamma"] == "0.98"
+    assert "NormalActionNoise" in td3["action_noise"]
+    assert (tmp_path / "compare.png").stat().st_size > 10_000
+
+
+def test_the_zoos_entries_become_sb3_keywords_and_other_environments_take_sb3s_defaults():
+    from somarm.peers import zoo
+
+    keywords, budget, source = zoo.settings("sac", "MountainCarContinuous-v0", 1)
+    assert budget == 50_000 and source.startswith("rl-zoo3")
+    assert keywords["use_sde"] is True and keywords["policy_kwargs"]["net_arch"] == [64, 64]
+    assert keywords["policy_kwargs"]["log_std_init"] == -3.67 and "n_timesteps" not in keywords
+    keywords, budget, source = zoo.settings("td3", "MountainCarContinuous-v0", 1)
+    assert budget == 300_000 and type(keywords["action_noise"]).__name__ == "OrnsteinUhlenbeckActionNoise"
+    keywords, budget, source = zoo.settings("td3", "InvertedPendulum-v5", 1)
+    assert budget is None and source == "SB3 defaults with Gaussian action noise 0.1"
+    assert float(keywords["action_noise"]._sigma[0]) == 0.1
+    assert zoo.settings("sac", "Reacher-v5", 2)[:2] == ({}, None)
+    assert compare.peer_budget("td3", compare.CompareConfig(task="gym:Pendulum-v1")) == 20_000
+    assert compare.peer_budget("sac", compare.CompareConfig(task="gym:Reacher-v5", samples=777)) == 777
