@@ -13,6 +13,7 @@ from somarm import __version__
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.peers.compare import peers_missing
 from somarm.reproduce import (
+    benchmarks,
     beyond,
     delayed,
     four_goals,
@@ -47,7 +48,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
 }
 
 #: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
-OPTIONAL: dict[str, Callable[[Context], Section]] = {"peers": peers.peers}
+OPTIONAL: dict[str, Callable[[Context], Section]] = {"peers": peers.peers, "benchmarks": benchmarks.benchmarks}
 
 
 def check_names(only: list[str] | None) -> list[str]:
@@ -56,7 +57,7 @@ def check_names(only: list[str] | None) -> list[str]:
     unknown = [n for n in names if n not in EXPERIMENTS and n not in OPTIONAL]
     if unknown:
         raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join([*EXPERIMENTS, *OPTIONAL])}")
-    if "peers" in names and (reason := peers_missing()):
+    if {"peers", "benchmarks"} & set(names) and (reason := peers_missing()):
         raise ValueError(reason)
     return names
 
