@@ -152,12 +152,13 @@ def _cmd_evaluate(args) -> int:
     task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
     if task.episodic:  # whole greedy episodes, as summary.json has them (--observations does not apply)
         greedy = run.greedy_measures(learner, task, seed=seed)
+        success = (f"success rate {greedy['greedy_success_rate']:.1%}; " if "greedy_success_rate" in greedy
+                   else "")  # a Gymnasium task has no goal of its own
         print(
             f"{config.task}: greedy mean return {greedy['greedy_mean_return']:+.4f} (sd "
-            f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); success rate "
-            f"{greedy['greedy_success_rate']:.1%}; mean episode length {greedy['greedy_mean_episode_length']:.2f} "
-            f"steps (a failed episode counts at the step limit); {greedy['greedy_episodes']} greedy episodes "
-            f"per trial, seed {seed}"
+            f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); {success}mean episode length "
+            f"{greedy['greedy_mean_episode_length']:.2f} steps (a failed episode counts at the step limit); "
+            f"{greedy['greedy_episodes']} greedy episodes per trial, seed {seed}"
         )
         return 0
     check_memory(f"--observations {args.observations} for {learner.n_trials} trial(s)",

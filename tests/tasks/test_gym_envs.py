@@ -180,3 +180,21 @@ def test_the_dm_env_and_gymnasium_paths_of_one_task_see_the_same_episodes():
         step = env.step(np.clip(task.action_low + (action + 1.0) * 0.5 * (task.action_high - task.action_low),
                                 task.action_low, task.action_high))
         assert reward == pytest.approx(step.reward, abs=1e-5)
+
+
+def test_train_evaluate_and_sweep_take_a_gym_task(tmp_path, capsys):
+    from somarm.cli import main
+
+    assert main(["train", "gym:Pendulum-v1", "--trials", "2", "--steps", "400", "--out", str(tmp_path / "run"),
+                 "--no-progress", "--no-figures"]) == 0
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["preset"] == "pendulum" and summary["greedy_episodes"] == 100
+    assert "greedy_success_rate" not in summary and summary["greedy_mean_episode_length"] == 200.0
+    curves = np.load(tmp_path / "run" / "curves.npz")
+    assert set(curves["episode_trials"]) == {0, 1} and np.all(curves["episode_lengths"] == 200)
+    capsys.readouterr()
+    assert main(["evaluate", str(tmp_path / "run")]) == 0
+    assert f"greedy mean return {summary['greedy_mean_return']:+.4f}" in capsys.readouterr().out
+    assert main(["sweep", "gym:Pendulum-v1", "--grid", "epsilon=0.2,0.5", "--steps", "200", "--out",
+                 str(tmp_path / "sweep"), "--no-figures", "--no-progress"]) == 0
+    assert "minus the episode return" in capsys.readouterr().out
