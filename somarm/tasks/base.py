@@ -88,6 +88,17 @@ class TaskBase:
         """
         return np.zeros(self.action_dim, dtype=np.bool_)
 
+    def batch_actions(self, actions: object) -> np.ndarray:
+        """``actions`` checked as one step of the batch: ``(n_trials, action_dim)``, finite, in the box.
+
+        Raises:
+          ValueError: the wrong shape, NaN or inf, or a value outside the bounds (one line).
+        """
+        actions = check_actions("actions", actions, self.action_low, self.action_high)
+        if actions.shape != (self.n_trials, self.action_dim):
+            raise ValueError(f"actions must have shape ({self.n_trials}, {self.action_dim}), got {actions.shape}")
+        return actions
+
     def set_step(self, t: int) -> None:
         """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase).
 

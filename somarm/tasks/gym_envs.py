@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from somarm.streams import PURPOSES, trial_generators, trial_ids_for
-from somarm.tasks.base import TaskBase, check_actions
+from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
 __all__ = ["PREFIX", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS",
@@ -70,9 +70,15 @@ class GymParams:
 
     def make_env(self):
         """A new copy of the environment (``gymnasium.make``)."""
-        import gymnasium
+        return _make(self.env_id, dict(self.kwargs))
 
-        return gymnasium.make(self.env_id, **dict(self.kwargs))
+
+def _make(env_id: str, kwargs: dict[str, Any]):
+    """``gymnasium.make``; this project's own ids (``somarm/Reach2-v0``) through Gymnasium's
+    ``module:id`` form, which imports the module that registers them first."""
+    import gymnasium
+
+    return gymnasium.make(("somarm.peers.gym:" + env_id) if env_id.startswith("somarm/") else env_id, **kwargs)
 
 
 def _gymnasium():
@@ -91,14 +97,12 @@ def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
       ValueError: an unknown id, a missing extra, a keyword the environment refuses, or a space
         that is not a ``Box`` (one line saying why).
     """
-    gymnasium = _gymnasium()
+    _gymnasium()  # a one-line error where Gymnasium is missing
     from gymnasium import error, spaces
 
-    if env_id.startswith("somarm/"):  # this project's one-step tasks as Gymnasium environments
-        import somarm.peers.gym  # noqa: F401  (registers the somarm/ ids)
     name = PREFIX + env_id
     try:
-        env = gymnasium.make(env_id, **json.loads(kwargs_json))
+        env = _make(env_id, json.loads(kwargs_json))
     except (error.NameNotFound, error.NamespaceNotFound, error.VersionNotFound, error.UnregisteredEnv) as exc:
         raise ValueError(f"unknown Gymnasium environment {env_id!r} ({exc}); give a registered id, "
                          "such as gym:Pendulum-v1") from None
@@ -261,9 +265,7 @@ class GymTask(TaskBase):
         """
         if not self._started:
             raise ValueError(f"{self.name}: call reset() before step()")
-        actions = check_actions("actions", actions, self.action_low, self.action_high)
-        if actions.shape != (self.n_trials, self.action_dim):
-            raise ValueError(f"actions must have shape ({self.n_trials}, {self.action_dim}), got {actions.shape}")
+        actions = self.batch_actions(actions)
         rewards = np.empty(self.n_trials)
         for i, env in enumerate(self._envs):
             observation, reward, terminated, truncated, _ = env.step(self.env_action(env, actions[i]))
