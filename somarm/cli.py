@@ -34,6 +34,8 @@ def _cmd_tasks(args) -> int:
 
     for name in tasks.names():
         print(f"{name:16s} {tasks.record(name).summary}")
+    print(f"{'gym:ID':16s} any Gymnasium environment with Box spaces, e.g. gym:Pendulum-v1 (multi-step episodes; "
+          "--task-set passes gymnasium.make keywords)")
     return 0
 
 
@@ -42,8 +44,9 @@ def _cmd_presets(args) -> int:
     from somarm.learners.settings import format_settings, settings_of
 
     if args.name is None:
+        width = max(map(len, presets.PRESETS))
         for name in presets.PRESETS:
-            print(f"{name:10s} {presets.describe(name)}")
+            print(f"{name:{width}s} {presets.describe(name)}")
         return 0
     if args.name not in presets.PRESETS:
         raise ValueError(f"unknown preset {args.name!r}; allowed: {', '.join(presets.PRESETS)}")
