@@ -40,7 +40,7 @@ class RunConfig:
     Each field's metadata gives its ``somarm train`` option; ``add_options`` reads them.
     """
 
-    task: str = field(metadata=_option("task", "task name (see `somarm tasks`)"))
+    task: str = field(metadata=_option("task", "task name (see `somarm tasks`), or gym:ID for a Gymnasium environment"))
     """Registered task name (``somarm tasks`` lists them)."""
     learner: str = field(default="somq", metadata=_option(
         "--learner", "learner kind: somq (the paper's model), motoric (the Fig. 13 B baseline) or tabular (a fixed grid)",
