@@ -274,10 +274,20 @@ class MujocoScene:
         ]
 
     def extent(self, state=None) -> tuple[np.ndarray, np.ndarray]:
-        """``(low, high)`` world corners of the box around every drawn geom at ``state`` (bounding spheres)."""
+        """``(low, high)`` world corners of the box around every drawn geom at ``state`` (planes aside).
+
+        Each geom's own bounding box (``geom_aabb``, in the geom frame) is turned into the world, so a
+        long thin capsule adds its length, not the sphere around it.
+        """
         data = self.set_state(state)
-        centres = data.geom_xpos[self.geom_ids]
-        radius = self.model.geom_rbound[self.geom_ids][:, None]
-        planes = self.model.geom_type[self.geom_ids] == mujoco.mjtGeom.mjGEOM_PLANE
-        keep = ~planes if (~planes).any() else planes  # planes are endless: they do not set the extent
-        return (centres - radius)[keep].min(axis=0), (centres + radius)[keep].max(axis=0)
+        model = self.model
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
+        keep = [int(g) for g in self.geom_ids if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE]
+        if not keep:  # only planes: their centres
+            centres = data.geom_xpos[self.geom_ids]
+            return centres.min(axis=0), centres.max(axis=0)
+        aabb = model.geom_aabb[keep]  # (n, 6): centre and half-sizes in the geom frame
+        local = aabb[:, None, :3] + signs[None] * aabb[:, None, 3:]
+        rotation = data.geom_xmat[keep].reshape(-1, 3, 3)
+        world = np.einsum("nij,nkj->nki", rotation, local) + data.geom_xpos[keep][:, None, :]
+        return world.reshape(-1, 3).min(axis=0), world.reshape(-1, 3).max(axis=0)

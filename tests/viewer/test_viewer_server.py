@@ -427,6 +427,11 @@ def test_cli_serves_until_ctrl_c_and_leaves_no_server():
         port = int(line.split("http://127.0.0.1:")[1].split("/")[0])
         assert listening_addresses(port) == {"127.0.0.1"}
         assert "error" in viewer.stdout.readline()  # one line per goal shown
+        import urllib.request
+
+        assert "<title>reach2</title>" in urllib.request.urlopen(f"http://127.0.0.1:{port}/").read().decode()
+        text = _overlay(port)
+        assert text["title"] == "reach2: greedy answer for each goal" and text["caption"][0].startswith("goal ")
         viewer.send_signal(signal.SIGINT)
         assert viewer.wait(timeout=15) == 130
         assert wait_until(lambda: not listening_addresses(port), timeout_s=10)
@@ -434,3 +439,27 @@ def test_cli_serves_until_ctrl_c_and_leaves_no_server():
         if viewer.poll() is None:
             viewer.kill()
             viewer.wait()
+
+
+def test_train_view_keeps_showing_the_final_policy_until_ctrl_c(tmp_path):
+    out = tmp_path / "run"
+    command = [sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "2000", "--view", "--out", str(out),
+               "--no-progress", "--no-figures"]
+    env = dict(os.environ, MUJOCO_GL="disable")
+    training = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        first = training.stdout.readline()
+        assert first.startswith("viewer: http://127.0.0.1:"), first + training.stderr.read()
+        port = int(first.split("http://127.0.0.1:")[1].split("/")[0])
+        assert training.stdout.readline().startswith("done: 2000 steps")
+        assert "the viewer keeps showing the final policy" in training.stdout.readline()
+        assert (out / "learner.npz").is_file()  # the run is written before the viewer waits
+        assert wait_until(lambda: _overlay(port).get("status", "").startswith("training finished after 2,000"),
+                          timeout_s=10)
+        training.send_signal(signal.SIGINT)
+        assert training.wait(timeout=15) == 0
+        assert wait_until(lambda: not listening_addresses(port), timeout_s=10)
+    finally:
+        if training.poll() is None:
+            training.kill()
+            training.wait()
