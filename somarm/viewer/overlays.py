@@ -252,10 +252,20 @@ def animation_command(frames: list[list[dict]], *, fps: float = 30.0, repetition
         if track[-1][0] != last:
             track.append((last, *track[-1][1:]))
         tracks = [
-            {"name": "." + name, "type": kind, "keys": [{"time": key[0], "value": key[i]} for key in track]}
+            {"name": "." + name, "type": kind, "keys": _without_repeats([{"time": key[0], "value": key[i]}
+                                                                        for key in track])}
             for i, (name, kind) in enumerate((("position", "vector3"), ("quaternion", "quaternion"),
                                               ("scale", "vector3")), start=1)
         ]
         animations.append({"path": path, "clip": {"fps": float(fps), "name": "default", "tracks": tracks}})
     return {"type": "set_animation", "animations": animations, "options": {"play": True, "repetitions": repetitions},
             "path": ""}
+
+
+def _without_repeats(keys: list[dict]) -> list[dict]:
+    """The keys without those equal to both neighbours (interpolating between the neighbours gives them)."""
+    kept = keys[:1]
+    for k in range(1, len(keys) - 1):
+        if not (keys[k]["value"] == kept[-1]["value"] == keys[k + 1]["value"]):
+            kept.append(keys[k])
+    return kept + keys[1:][-1:]
