@@ -4,8 +4,9 @@ A show turns one trial's (observation, action) into meshcat commands and overlay
 draws random numbers and never talks to a server itself, so the CLI, the live training view and
 the HTML export share it, and tests can check its poses against MuJoCo. Each show also knows how
 a viewing session is recorded (``record``: a page with one looping animation) and played
-(``play``: goal after goal on a live server). Throws are in ``throws.py``, arms driven along
-MuJoCo trajectories in ``motion.py``, any other MuJoCo model in ``model_view.py``.
+(``play``: goal after goal on a live server). Sweeps of postures are in ``postures.py``, throws in
+``throws.py``, arms driven along MuJoCo trajectories in ``motion.py``, any other MuJoCo model in
+``model_view.py``.
 
 Planar arms are seen from straight above, the table filling the frame, on a faint grid with a
 scale. The goal is a green ring above the arm, larger than the fingertip (a small amber ball), so
@@ -28,7 +29,7 @@ from somarm.viewer.adapters import goal_adapter
 from somarm.viewer.scene import MujocoScene, path_of
 from somarm.viewer.text import Timeline, css, number, text_command
 
-__all__ = ["ArmShow", "SweepShow", "TIP_COLOR", "GOAL_COLOR", "ERROR_COLOR", "INPUT_COLOR", "arm_animation",
+__all__ = ["ArmShow", "TIP_COLOR", "GOAL_COLOR", "ERROR_COLOR", "INPUT_COLOR", "arm_animation", "hold",
            "joint_path", "load_model", "shade", "show_for_task"]
 
 TIP_COLOR, GOAL_COLOR, ERROR_COLOR, INPUT_COLOR = 0xE8A200, 0x1E9E4A, 0xD62828, 0x3060D0
@@ -247,79 +248,6 @@ class ArmShow:
         _stream(session, sink, show, lambda: interval_s, once=once, log=log)
 
 
-class SweepShow:
-    """Fig. 11: the arm's greedy postures for a sweep of goals, all at once, shaded along the sweep.
-
-    Goals (green rings) and errors (red) have one colour; each posture and its fingertip are
-    shaded from blue (the first goal of the sweep) to red (the last).
-
-    Args:
-      model: the arm model (as ``ArmShow``).
-      n_postures: how many goals of the sweep are drawn together.
-      goal_of: as in ``ArmShow``.
-    """
-
-    def __init__(self, model: mujoco.MjModel, n_postures: int, *, goal_of=None,
-                 prefix: str = "/meshcat/sweep") -> None:
-        self.model = model
-        self.prefix = path_of(prefix)
-        self.arms = [ArmShow(model, goal_of=goal_of, prefix=f"{prefix}/posture{k:02d}") for k in range(n_postures)]
-        for k, arm in enumerate(self.arms):
-            arm.tip_color = shade(k / max(n_postures - 1, 1))
-        self.errors = np.full(n_postures, np.nan)
-
-    def setup(self, points: np.ndarray | None = None) -> list[dict]:
-        """Every posture's moving parts in its shade; the table, base, grid and camera once."""
-        commands = []
-        for k, arm in enumerate(self.arms):
-            world = arm.scene.body_node("world").lower()
-            moving = {arm.scene.body_node(name).lower() for name, m in zip(arm.scene.body_names, arm.scene.moving,
-                                                                        strict=True) if m}
-            for command in arm.setup(points):
-                path = command["path"]
-                if k and (path.startswith(world) or not path.startswith(arm.prefix.lower())
-                          or path.startswith(arm.prefix.append("grid").lower())
-                          or path.startswith(arm.prefix.append("scale").lower())):
-                    continue  # the table, the base, the grid, the scale and the camera: once is enough
-                if command["type"] == "set_object" and any(path.startswith(m + "/") for m in moving):
-                    for material in command["object"]["materials"]:
-                        material["color"] = arm.tip_color
-                commands.append(command)
-        return commands
-
-    def frame(self, observations: np.ndarray, actions: np.ndarray) -> list[dict]:
-        """Posture k at ``actions[k]`` for goal ``observations[k]``; shapes ``(n_postures, dim)``."""
-        commands = []
-        for k, (arm, observation, action) in enumerate(zip(self.arms, observations, actions, strict=True)):
-            commands += arm.frame(observation, action)
-            self.errors[k] = arm.last_error
-        return commands
-
-    def text(self, session) -> dict:
-        """Title, run, the errors of the sweep, the key, and which end is the first goal."""
-        n = len(self.arms)
-        worst = int(np.nanargmax(self.errors))
-        arm = self.arms[0]
-        key = [[css(shade(0.0)), "posture of goal 1"], [css(shade(1.0)), f"goal {n}"], [css(GOAL_COLOR), "goals"],
-               [css(ERROR_COLOR), "errors"]] + arm.view_text["key"]
-        labels = arm.view_text["labels"] + [[self.arms[0].prefix.append("goal_label").lower(), "goal 1"],
-                                            [self.arms[-1].prefix.append("goal_label").lower(), f"goal {n}"]]
-        caption = [f"{n} goals swept in order; mean error {number(np.nanmean(self.errors))}, "
-                   f"worst {number(self.errors[worst])} (goal {worst + 1})"]
-        return text_command(title=session.title(), lines=session.lines(), caption=caption, key=key, labels=labels,
-                            timeline=None)
-
-    def record(self, session, sink) -> None:
-        """Every posture of the session's sweep at once."""
-        sink.send_batch(self.setup(self.arms[0].session_points(session)))
-        sink.send_batch(self.frame(session.observations, session.actions))
-        sink.send(self.text(session))
-
-    def play(self, session, sink, *, interval_s: float, once: bool, log) -> None:
-        """The sweep, drawn once and kept on screen until Ctrl-C (or at once if ``once``)."""
-        hold(self, session, sink, interval_s=interval_s, once=once, log=log)
-
-
 def hold(show, session, sink, *, interval_s: float, once: bool, log) -> None:
     """Record the session, then keep it on screen until Ctrl-C (or return at once if ``once``)."""
     show.record(session, sink)
@@ -379,6 +307,7 @@ def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
       ValueError: unknown task name (the names are listed).
     """
     from somarm import tasks
+    from somarm.viewer.postures import SweepShow
     from somarm.viewer.throws import throw_show
 
     model_name = tasks.record(task_name).model

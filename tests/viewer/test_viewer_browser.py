@@ -20,9 +20,10 @@ from meshcat.commands import Delete, SetProperty
 from somarm.tasks.throw import simulate_trajectory
 from somarm.viewer.client import MeshcatClient, Recorder
 from somarm.viewer.html import write_html
+from somarm.viewer.postures import SweepShow
 from somarm.viewer.scene import path_of
 from somarm.viewer.server import MeshcatServer
-from somarm.viewer.shows import ArmShow, SweepShow, load_model
+from somarm.viewer.shows import ArmShow, load_model
 from somarm.viewer.text import number
 from somarm.viewer.throws import ThrowShow
 
