@@ -130,8 +130,10 @@ def record_states(model: mujoco.MjModel, states, sink, *, timestep: float, title
 
 
 def view_states(model: mujoco.MjModel, states, *, timestep: float, title: str = "MuJoCo model", lines=(),
-                html=None, host: str = "127.0.0.1", port: int | None = None, log=print):
+                describe=None, html=None, host: str = "127.0.0.1", port: int | None = None, log=print):
     """Watch ``states`` of ``model``: write an offline page to ``html``, or serve it until Ctrl-C.
+
+    ``describe(i) -> lines`` is the text for state ``i`` (``Rollout.describe``: episode, step, return).
 
     Returns:
       The path written (with ``html``); otherwise returns only on Ctrl-C (KeyboardInterrupt is raised).
@@ -141,7 +143,7 @@ def view_states(model: mujoco.MjModel, states, *, timestep: float, title: str = 
         from somarm.viewer.html import write_html
 
         recorder = Recorder()
-        record_states(model, states, recorder, timestep=timestep, title=title, lines=lines)
+        record_states(model, states, recorder, timestep=timestep, title=title, lines=lines, describe=describe)
         return write_html(html, recorder.commands(), title=title)
     from somarm.viewer.client import MeshcatClient
     from somarm.viewer.server import MeshcatServer, stop_on_signals
@@ -150,7 +152,7 @@ def view_states(model: mujoco.MjModel, states, *, timestep: float, title: str = 
         stop_on_signals(server)
         client = MeshcatClient(server.zmq_url)
         try:
-            record_states(model, states, client, timestep=timestep, title=title, lines=lines)
+            record_states(model, states, client, timestep=timestep, title=title, lines=lines, describe=describe)
             log(f"{title}: open {server.web_url}  (Ctrl-C to stop)")
             while True:
                 time.sleep(1.0)

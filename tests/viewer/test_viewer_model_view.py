@@ -80,7 +80,7 @@ def test_mjdata_states_draw_as_their_qpos(pendulum):
 def test_view_states_writes_a_page_and_refuses_no_states(pendulum, tmp_path):
     states = rollout(pendulum, n_steps=10, seed=0)
     path = view_states(pendulum.unwrapped.model, states.qpos, timestep=states.timestep, title="pendulum",
-                       html=tmp_path / "p.html")
+                       describe=states.describe, html=tmp_path / "p.html")
     text = path.read_text()
     assert "<title>pendulum</title>" in text and "SomarmOverlay" in text
     with pytest.raises(ValueError, match="states is empty"):
