@@ -84,10 +84,13 @@ def _train_into(out: Path, group, args, owner) -> int:
     sigterm_as_interrupt()
     view = None
     if args.view:
-        from somarm.viewer.live import LiveView
+        from somarm.viewer.live import LiveView, greedy_policy
 
+        trial_id = int(config.trial_ids_array()[0])
+        about = [f"{config.learner} learner ({config.preset}), trial {trial_id}, seed {config.seed}"]
         try:
-            view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
+            view = LiveView(config.task, policy=greedy_policy(group.learners[0], 0), host=args.host, port=args.port,
+                            task_params=config.task_params, seed=config.seed, n_steps=config.n_steps, lines=about)
         except (OSError, RuntimeError) as exc:
             owner.release(remove_if_unused=True)  # nothing was run: leave no empty folder behind
             where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")
@@ -104,15 +107,19 @@ def _train_into(out: Path, group, args, owner) -> int:
         # A second Ctrl-C or SIGTERM waits until the run is written (it then still ends the command).
         with signals_deferred():
             if view is not None:
-                view.close()
+                view.finish(result.steps_done)  # the page says so and shows the final policy
             extra = run.greedy_summary(result)  # the run is written whatever happens here
             if "greedy_error" in extra:
                 print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
             _write_run(result, owner, figures=not args.no_figures, extra_summary=extra)
     except KeyboardInterrupt:
+        if view is not None:
+            view.close()
         print(f"interrupted after step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
         return 130
     if result.interrupted:
+        if view is not None:
+            view.close()
         print(f"interrupted at step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
         return 130
     if "greedy_mean_return" in extra:  # an episodic task: whole greedy episodes, not one step
@@ -120,8 +127,26 @@ def _train_into(out: Path, group, args, owner) -> int:
     else:
         greedy = f"greedy mean reward {extra.get('greedy_mean_reward', float('nan')):+.4f}"
     print(f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
-          f"{greedy}; results in {out}")
+          f"{greedy}; results in {out}", flush=True)
+    if view is not None:
+        _keep_viewing(view)
     return 0
+
+
+def _keep_viewing(view) -> None:
+    """After training: the viewer keeps showing the final policy until Ctrl-C (the run is already written)."""
+    import time
+
+    if view.alive:
+        print(f"training finished: the viewer keeps showing the final policy at {view.url} (Ctrl-C to stop)",
+              flush=True)
+    try:
+        while view.serving():
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        view.close()
 
 
 def _write_run(result, owner, **kwargs) -> None:

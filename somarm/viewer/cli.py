@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
 
             recorder = Recorder()
             sessions.record(session, recorder)
-            path = write_html(args.html, recorder.commands(), title=f"somarm {args.task}")
+            path = write_html(args.html, recorder.commands(), title=args.task)
             print(f"wrote {path} (mean error {session.errors.mean():.4f} over {len(session.errors)} goals)")
             return 0
     except ValueError as exc:
@@ -94,7 +94,7 @@ def _serve(session, args) -> int:
     from somarm.viewer.client import MeshcatClient
     from somarm.viewer.server import MeshcatServer, stop_on_signals
 
-    server = MeshcatServer(host=args.host, port=args.port)
+    server = MeshcatServer(host=args.host, port=args.port, title=args.task)
     try:
         server.start()
     except (RuntimeError, OSError) as exc:
