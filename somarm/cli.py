@@ -89,8 +89,16 @@ def _train_into(out: Path, group, args, owner) -> int:
         trial_id = int(config.trial_ids_array()[0])
         about = [f"{config.learner} learner ({config.preset}), trial {trial_id}, seed {config.seed}"]
         try:
-            view = LiveView(config.task, policy=greedy_policy(group.learners[0], 0), host=args.host, port=args.port,
-                            task_params=config.task_params, seed=config.seed, n_steps=config.n_steps, lines=about)
+            if config.task.startswith("gym:"):  # a Gymnasium MuJoCo environment: greedy episodes on a copy of it
+                from somarm.viewer import gym_view
+
+                view = LiveView(env=gym_view.environment(config.task, config.task_params),
+                                policy=gym_view.one_step_policy(group.task, group.learners[0], 0), host=args.host,
+                                port=args.port, seed=config.seed, n_steps=config.n_steps, lines=[config.task, *about])
+            else:
+                view = LiveView(config.task, policy=greedy_policy(group.learners[0], 0), host=args.host,
+                                port=args.port, task_params=config.task_params, seed=config.seed,
+                                n_steps=config.n_steps, lines=about)
         except (OSError, RuntimeError) as exc:
             owner.release(remove_if_unused=True)  # nothing was run: leave no empty folder behind
             where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")

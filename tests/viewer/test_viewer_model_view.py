@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import json
+
 import mujoco
 import numpy as np
 import pytest
+import umsgpack
 
 from somarm.viewer.client import Recorder
 from somarm.viewer.model_view import ModelShow, Rollout, record_states, rollout, view_states
@@ -86,3 +89,27 @@ def test_view_states_writes_a_page_and_refuses_no_states(pendulum, tmp_path):
     with pytest.raises(ValueError, match="states is empty"):
         record_states(pendulum.unwrapped.model, [], Recorder(), timestep=0.1, title="x")
     assert Rollout(states.qpos, states.rewards, [4], states.timestep).describe(6)[0].startswith("episode 2: step 2")
+
+
+def test_somarm_view_draws_a_gym_mujoco_run_and_refuses_a_gym_task_without_a_model(tmp_path, capsys):
+    from somarm import run
+    from somarm.run import RunConfig
+    from somarm.viewer.cli import main
+
+    result = run.train(RunConfig(task="gym:Reacher-v5", n_trials=2, n_steps=200, block=100, seed=3), progress=False)
+    run.write(result, tmp_path / "run", figures=False)
+    page = tmp_path / "reacher.html"
+    assert main(["gym:Reacher-v5", "--run", str(tmp_path / "run"), "--goals", "2", "--trial", "1",
+                 "--html", str(page)]) == 0
+    import base64
+    import re
+
+    encoded = json.loads(re.search(r"var commands = (\[.*?\]);", page.read_text()).group(1))
+    sent = repr([umsgpack.unpackb(base64.b64decode(e)) for e in encoded])
+    assert "<title>gym:Reacher-v5</title>" in page.read_text()
+    assert "trial 1" in sent and "fingertip" in sent and "episode 2" in sent
+    assert main(["gym:Pendulum-v1", "--html", str(tmp_path / "p.html")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "gym:Pendulum-v1 is not a MuJoCo environment" in err
+    assert main(["gym:Reacher-v5", "--run", str(tmp_path / "run"), "--trial", "5", "--html", str(page)]) == 2
+    assert "--trial 5 is not a trial of" in capsys.readouterr().err
