@@ -393,8 +393,9 @@ def _benchmarks() -> tuple[Preset, ...]:
         (*_RECIPE,
          "a 3x3 grid of torques over the 2 joints; rewards are <= 0, so q_init = 0 is optimistic; gamma 0.9 "
          "for 50-step episodes",
-         "not measured: a 2-D map over 10 observed dimensions (joint angles, target, velocities) is not "
-         "expected to reach -6"),
+         "tuning seed 101, 2 trials: greedy -12.0 after 50,000 steps and -11.9 after 200,000 (random actions "
+         "about -43), short of -6: a 20x20 map over 10 observed dimensions (joint angles, target, velocities, "
+         "the fingertip-to-target vector) cannot resolve where the target is finely enough"),
         n_trials=5, n_steps=200_000)
     return generic, pendulum, mountaincar, invertedpendulum, reacher
 
