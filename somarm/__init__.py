@@ -13,4 +13,13 @@ if "MUJOCO_GL" not in _os.environ and not (_os.environ.get("DISPLAY") or _os.env
     _os.environ["MUJOCO_GL"] = "disable"
 
 __version__ = "0.1.0"  # the one place the version is written: pyproject.toml reads it from here
-__all__ = ["__version__"]
+__all__ = ["__version__", "SOMQ"]
+
+
+def __getattr__(name: str):
+    # ``from somarm import SOMQ`` (the SB3-style model) loads the run machinery only when asked for.
+    if name == "SOMQ":
+        from somarm.agent import SOMQ
+
+        return SOMQ
+    raise AttributeError(f"module 'somarm' has no attribute {name!r}")

@@ -34,6 +34,8 @@ def _cmd_tasks(args) -> int:
 
     for name in tasks.names():
         print(f"{name:16s} {tasks.record(name).summary}")
+    print(f"{'gym:ID':16s} any Gymnasium environment with Box spaces, e.g. gym:Pendulum-v1 (multi-step episodes; "
+          "--task-set passes gymnasium.make keywords)")
     return 0
 
 
@@ -42,8 +44,9 @@ def _cmd_presets(args) -> int:
     from somarm.learners.settings import format_settings, settings_of
 
     if args.name is None:
+        width = max(map(len, presets.PRESETS))
         for name in presets.PRESETS:
-            print(f"{name:10s} {presets.describe(name)}")
+            print(f"{name:{width}s} {presets.describe(name)}")
         return 0
     if args.name not in presets.PRESETS:
         raise ValueError(f"unknown preset {args.name!r}; allowed: {', '.join(presets.PRESETS)}")
@@ -81,10 +84,21 @@ def _train_into(out: Path, group, args, owner) -> int:
     sigterm_as_interrupt()
     view = None
     if args.view:
-        from somarm.viewer.live import LiveView
+        from somarm.viewer.live import LiveView, greedy_policy
 
+        trial_id = int(config.trial_ids_array()[0])
+        about = [f"{config.learner} learner ({config.preset}), trial {trial_id}, seed {config.seed}"]
         try:
-            view = LiveView(config.task, host=args.host, port=args.port, task_params=config.task_params)
+            if config.task.startswith("gym:"):  # a Gymnasium MuJoCo environment: greedy episodes on a copy of it
+                from somarm.viewer import gym_view
+
+                view = LiveView(env=gym_view.environment(config.task, config.task_params),
+                                policy=gym_view.one_step_policy(group.task, group.learners[0], 0), host=args.host,
+                                port=args.port, seed=config.seed, n_steps=config.n_steps, lines=[config.task, *about])
+            else:
+                view = LiveView(config.task, policy=greedy_policy(group.learners[0], 0), host=args.host,
+                                port=args.port, task_params=config.task_params, seed=config.seed,
+                                n_steps=config.n_steps, lines=about)
         except (OSError, RuntimeError) as exc:
             owner.release(remove_if_unused=True)  # nothing was run: leave no empty folder behind
             where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")
@@ -101,15 +115,19 @@ def _train_into(out: Path, group, args, owner) -> int:
         # A second Ctrl-C or SIGTERM waits until the run is written (it then still ends the command).
         with signals_deferred():
             if view is not None:
-                view.close()
+                view.finish(result.steps_done)  # the page says so and shows the final policy
             extra = run.greedy_summary(result)  # the run is written whatever happens here
             if "greedy_error" in extra:
                 print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
             _write_run(result, owner, figures=not args.no_figures, extra_summary=extra)
     except KeyboardInterrupt:
+        if view is not None:
+            view.close()
         print(f"interrupted after step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
         return 130
     if result.interrupted:
+        if view is not None:
+            view.close()
         print(f"interrupted at step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
         return 130
     if "greedy_mean_return" in extra:  # an episodic task: whole greedy episodes, not one step
@@ -117,8 +135,26 @@ def _train_into(out: Path, group, args, owner) -> int:
     else:
         greedy = f"greedy mean reward {extra.get('greedy_mean_reward', float('nan')):+.4f}"
     print(f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
-          f"{greedy}; results in {out}")
+          f"{greedy}; results in {out}", flush=True)
+    if view is not None:
+        _keep_viewing(view)
     return 0
+
+
+def _keep_viewing(view) -> None:
+    """After training: the viewer keeps showing the final policy until Ctrl-C (the run is already written)."""
+    import time
+
+    if view.alive:
+        print(f"training finished: the viewer keeps showing the final policy at {view.url} (Ctrl-C to stop)",
+              flush=True)
+    try:
+        while view.serving():
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        view.close()
 
 
 def _write_run(result, owner, **kwargs) -> None:
@@ -152,12 +188,13 @@ def _cmd_evaluate(args) -> int:
     task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
     if task.episodic:  # whole greedy episodes, as summary.json has them (--observations does not apply)
         greedy = run.greedy_measures(learner, task, seed=seed)
+        success = (f"success rate {greedy['greedy_success_rate']:.1%}; " if "greedy_success_rate" in greedy
+                   else "")  # a Gymnasium task has no goal of its own
         print(
             f"{config.task}: greedy mean return {greedy['greedy_mean_return']:+.4f} (sd "
-            f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); success rate "
-            f"{greedy['greedy_success_rate']:.1%}; mean episode length {greedy['greedy_mean_episode_length']:.2f} "
-            f"steps (a failed episode counts at the step limit); {greedy['greedy_episodes']} greedy episodes "
-            f"per trial, seed {seed}"
+            f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); {success}mean episode length "
+            f"{greedy['greedy_mean_episode_length']:.2f} steps (a failed episode counts at the step limit); "
+            f"{greedy['greedy_episodes']} greedy episodes per trial, seed {seed}"
         )
         return 0
     check_memory(f"--observations {args.observations} for {learner.n_trials} trial(s)",
@@ -220,10 +257,11 @@ def _cmd_compare(args) -> int:
         seeds=args.seeds,
         seed=args.seed,
         observations=args.observations,
+        episodes=args.episodes,
         task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
     )
     compare.check(config)
-    out = _out_folder(args.out, f"compare/{config.task}")
+    out = _out_folder(args.out, f"compare/{config.task.replace(':', '-')}")
     owner = claim(out, force=args.force, what="a comparison")
     sigterm_as_interrupt()
     try:
@@ -296,11 +334,16 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.set_defaults(func=_cmd_reproduce)
 
     comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")
-    comp.add_argument("task", help="task name (see `somarm tasks`)")
-    comp.add_argument("--learners", default="somq,motoric,tabular,td3,sac",
-                      help="comma-separated, from somq, motoric, tabular, td3, sac (default: all five)")
+    comp.add_argument("task", help="task name (see `somarm tasks`), or gym:ID for a Gymnasium environment")
+    comp.add_argument("--learners", default="somq,somq+,motoric,tabular,td3,sac",
+                      help="comma-separated, from somq, somq+ (the task's + preset with the interpolated response), "
+                           "motoric, tabular, td3, sac (default: all six)")
     comp.add_argument("--samples", type=whole_number, default=10_000, help="training samples (default 10000)")
-    comp.add_argument("--peer-samples", type=whole_number, help="training samples of td3 and sac (default --samples)")
+    comp.add_argument("--peer-samples", type=whole_number,
+                      help="training samples of td3 and sac (default: RL Baselines3 Zoo's budget for a gym:ID it "
+                           "tunes, else --samples)")
+    comp.add_argument("--episodes", type=whole_number, default=100,
+                      help="fresh greedy episodes scored at the end, for gym:ID (a fifth at earlier rungs; default 100)")
     comp.add_argument("--seeds", type=whole_number, default=3, help="seeds S..S+K-1 for every learner (default 3)")
     comp.add_argument("--seed", type=whole_number, default=0, help="the first seed S (default 0)")
     comp.add_argument("--observations", type=whole_number, default=1000, help="fresh observations scored (1000)")

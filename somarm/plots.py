@@ -55,6 +55,16 @@ def save(fig: plt.Figure, path: str | Path, *, crop: bool = True) -> Path:
     return atomic_write_bytes(path, buffer.getvalue())
 
 
+def forward_filled(values: np.ndarray) -> np.ndarray:
+    """``(n_blocks, n_trials)`` with each NaN replaced by the last number above it in its column
+    (NaN until the first number)."""
+    filled = np.array(values, dtype=np.float64)
+    for row in range(1, len(filled)):
+        gap = np.isnan(filled[row])
+        filled[row, gap] = filled[row - 1, gap]
+    return filled
+
+
 def learning_curve(
     ax: plt.Axes,
     steps: np.ndarray,
@@ -223,11 +233,21 @@ def run_figures(result, out: Path) -> list[Path]:
     paths = []
     fig, ax = plt.subplots(figsize=(7, 4))
     window_blocks = max(1, min(1000, config.n_steps // 10) // config.block)
-    learning_curve(
-        ax, result.steps, result.block_means, window_blocks=window_blocks, per_trial=config.n_trials <= 30
-    )
+    returns = result.block_returns
+    if returns is not None and np.isfinite(returns).any(axis=0).all():
+        # A multi-step task's curve is in returns per episode: each block shows the episodes that
+        # ended in it (a block where a trial finished none holds that trial's last value).
+        shown = forward_filled(returns)
+        first_full = int(np.argmax(np.isfinite(shown).all(axis=1)))
+        learning_curve(ax, result.steps[first_full:], shown[first_full:], window_blocks=window_blocks,
+                       per_trial=config.n_trials <= 30)
+        ax.set_ylabel(f"return per episode (episodes ending in the last {window_blocks * config.block} steps)")
+    else:
+        learning_curve(
+            ax, result.steps, result.block_means, window_blocks=window_blocks, per_trial=config.n_trials <= 30
+        )
+        ax.set_ylabel(f"mean reward (last {window_blocks * config.block} steps)")
     ax.set_xlabel("training step t")
-    ax.set_ylabel(f"mean reward (last {window_blocks * config.block} steps)")
     ax.set_title(
         f"{config.task}: {config.learner}, preset {config.preset}, {config.n_trials} trial(s), "
         f"seed {config.seed}"

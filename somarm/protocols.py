@@ -104,14 +104,18 @@ class EpisodicTask(BatchedTask, Protocol):
     """
 
     next_observations: np.ndarray  #: (n_trials, obs_dim): where each trial is after the last step
-    terminal: np.ndarray  #: (n_trials,) bools: the last step ended the episode at the goal
+    terminal: np.ndarray  #: (n_trials,) bools: the last step ended the episode (at the goal; a Gymnasium "terminated")
     truncated: np.ndarray  #: (n_trials,) bools: the last step hit the step limit (not terminal)
-    goal: np.ndarray  #: the goal the episodes reach for, e.g. the fingertip's (x, y)
+    goal: np.ndarray  #: the goal the episodes reach for, e.g. the fingertip's (x, y); empty if none
+
+    def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` episode starts drawn with ``rng``, in the form ``run_episodes`` takes (start poses
+        ``(n, obs_dim)``, or a Gymnasium environment's reset seeds ``(n,)``)."""
 
     def run_episodes(self, policy, starts: np.ndarray, *, paths: bool = False) -> dict[str, np.ndarray]:
         """Whole episodes of ``policy`` (observations ``(m, obs_dim)`` -> actions ``(m, action_dim)``)
         from ``starts`` ``(m, obs_dim)``, all in one batch.
 
-        Returns ``{"success": (m,) bools, "length": (m,) steps, "returns": (m,)}``, with ``paths``
-        also ``"path"``: the joint angles of every timestep.
+        Returns ``{"length": (m,) steps, "returns": (m,)}`` and, for a task with a goal, ``"success":
+        (m,) bools``; with ``paths`` also ``"path"``: the state (joint angles, observations) of every timestep.
         """

@@ -18,7 +18,7 @@ __all__ = ["PURPOSES", "trial_ids_for", "trial_generators", "UniformStreams"]
 
 #: Each kind of draw gets its own family of streams, so that adding draws to one
 #: (say, the task) never shifts the numbers of another (the learner).
-PURPOSES: dict[str, int] = {"learner": 1, "task": 2, "evaluation": 3, "viewer": 4}
+PURPOSES: dict[str, int] = {"learner": 1, "task": 2, "evaluation": 3, "viewer": 4, "scaling": 5}
 
 
 def trial_ids_for(n_trials: int, trial_ids: Sequence[int] | None = None) -> np.ndarray:

@@ -4,7 +4,8 @@ Trains the same short run three ways in one process, interleaved and repeated so
 machine noise hits each alike: without a viewer, with ``LiveView`` and no browser, and with
 ``LiveView`` watched by a headless Chromium (when ``/usr/bin/chromium`` and Playwright are
 there). Prints median wall and CPU times and their ratios to the run without a viewer,
-plus the cost of one throttled ``update`` call. On a machine without a GPU the browser
+plus the cost of one throttled ``update`` call. The view shows each run's greedy policy on its
+cycle of goals, as ``somarm train --view`` does. On a machine without a GPU the browser
 renders WebGL in software and competes with training for the cores: compare the CPU ratio
 (the viewer's own cost inside training) with the wall ratio (everything, browser included).
 """
@@ -23,12 +24,16 @@ from somarm.validation import OneLineParser, check_int, check_number, number, wh
 
 __all__ = ["main"]
 
-def _train_seconds(config, hook) -> tuple[float, float, int]:
-    """Wall seconds, CPU seconds of this process, steps done."""
-    from somarm.run import train
+def _train_seconds(config, view) -> tuple[float, float, int]:
+    """Wall seconds, CPU seconds of this process, steps done; ``view`` (or None) shows the run's greedy policy."""
+    from somarm.run import RunGroup
+    from somarm.viewer.live import greedy_policy
 
+    group = RunGroup([config], lanes=1)
+    if view is not None:
+        view.set_policy(greedy_policy(group.learners[0]))
     start, cpu = time.perf_counter(), time.process_time()
-    result = train(config, progress=False, on_step=hook)
+    result = group.train(progress=False, on_step=None if view is None else view.update)[0]
     return time.perf_counter() - start, time.process_time() - cpu, result.steps_done
 
 
@@ -48,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=whole_number, default=20_000)
     parser.add_argument("--trials", type=whole_number, default=1)
     parser.add_argument("--repeats", type=whole_number, default=3)
-    parser.add_argument("--rate", type=number, default=30.0, help="LiveView max_rate_hz")
+    parser.add_argument("--rate", type=number, default=30.0, help="LiveView max_rate_hz (reward samples a second)")
     args = parser.parse_args(argv)
     for name in ("steps", "trials", "repeats"):
         check_int(f"--{name}", getattr(args, name))
@@ -80,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
             times["no viewer"].append(seconds)
             cpu["no viewer"].append(cpu_s)
             sent = view.frames_sent
-            seconds, cpu_s, steps = _train_seconds(config, view.update)
+            seconds, cpu_s, steps = _train_seconds(config, view)
             times["LiveView, no browser"].append(seconds)
             cpu["LiveView, no browser"].append(cpu_s)
             frames_no_browser = view.frames_sent - sent
@@ -89,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
                 page.goto(view.url)
                 page.wait_for_function("() => typeof viewer !== 'undefined'", timeout=30_000)
                 sent = view.frames_sent
-                seconds, cpu_s, steps = _train_seconds(config, view.update)
+                seconds, cpu_s, steps = _train_seconds(config, view)
                 times["LiveView + Chromium"].append(seconds)
                 cpu["LiveView + Chromium"].append(cpu_s)
                 frames_browser = view.frames_sent - sent

@@ -24,7 +24,7 @@ import numpy as np
 from somarm.learners.base import initial_generator
 from somarm.learners.interpolation import MAX_JUMP, NEIGHBOUR_SHARE, n_basis_for
 from somarm.learners.som import grid_coordinates, grid_distances, neighbourhood
-from somarm.learners.somq import SOMQConfig, row_width
+from somarm.learners.somq import SOMQConfig, grid_actions, row_width
 from somarm.streams import UniformStreams, trial_ids_for
 from somarm.validation import check_array, check_bounds, check_periodic
 
@@ -168,9 +168,12 @@ class ReferenceSOMQ:
         if config.input_init is not None:
             low, high = np.full_like(low, config.input_init[0]), np.full_like(high, config.input_init[1])
         self.input_weights = low + (high - low) * rng.random((n_s, low.size))
-        span = self.action_high - self.action_low
-        self.action_weights = self.action_low + span * rng.random((n_a, self.action_low.size))
-        self.q = np.zeros((n_s, n_a))
+        if config.action_init == "grid":
+            self.action_weights = grid_actions(config.action_shape, self.action_low, self.action_high)
+        else:
+            span = self.action_high - self.action_low
+            self.action_weights = self.action_low + span * rng.random((n_a, self.action_low.size))
+        self.q = np.full((n_s, n_a), float(config.q_init))
         self.t = 0
 
     def act(self, observation) -> np.ndarray:

@@ -37,11 +37,14 @@ from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import winners
+from somarm.validation import check_number
 
-__all__ = ["RESPONSES", "SOMQConfig", "SOMQ", "row_width"]
+__all__ = ["RESPONSES", "ACTION_INITS", "SOMQConfig", "SOMQ", "row_width", "grid_actions"]
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
+#: How the action weights start: the paper's uniform random draw, or evenly over the action box.
+ACTION_INITS = ("random", "grid")
 
 _F1 = InverseDecay(1000.0)
 
@@ -90,12 +93,42 @@ class SOMQConfig(ConfigBase):
     """Treat the action dimensions the task declares periodic (joint angles) as circles: wrap round
     instead of clipping, and move the action map along the shorter arc (False: the paper's box)."""
 
+    q_init: float = 0.0
+    """Every Q value at the start (the paper's 0). A value above every return the task can give
+    (optimistic initial values) makes the greedy policy try each pair until its value is learned."""
+
+    action_init: Literal["random", "grid"] = "random"
+    """Initial action weights: ``random`` (the paper's: uniform in the action box) or ``grid`` (unit i
+    at its grid place spread evenly over the box, the ends on the bounds; needs one grid dimension
+    per action dimension)."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
         validate_common(self, probabilities=("p",))
         if self.response not in RESPONSES:
             raise ValueError(f"response must be one of {', '.join(RESPONSES)}, got {self.response!r}")
+        if self.action_init not in ACTION_INITS:
+            raise ValueError(f"action_init must be one of {', '.join(ACTION_INITS)}, got {self.action_init!r}")
+        object.__setattr__(self, "q_init", check_number("q_init", self.q_init))
+
+
+def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Action weights spread evenly over the box ``[low, high]``: unit i at its grid place, ``(n_units, dim)``.
+
+    A line of n units on one action dimension runs from low to high in n - 1 equal steps; a
+    rectangle of rows x cols units covers two action dimensions (rows along the first).
+
+    Raises:
+      ValueError: the map does not have one grid dimension per action dimension (one line).
+    """
+    if len(shape) != low.size:
+        raise ValueError(f"action_init=grid needs an action map with one grid dimension per action dimension: "
+                         f"action_shape={shape_text(shape)} has {len(shape)}, the action box has {low.size}")
+    axes = [np.linspace(lo, hi, n) if n > 1 else np.array([(lo + hi) / 2.0])
+            for n, lo, hi in zip(shape, low, high, strict=True)]
+    mesh = np.meshgrid(*axes, indexing="ij")  # row-major, as the map's grid coordinates
+    return np.stack([m.ravel() for m in mesh], axis=1)
 
 
 def row_width(config: SOMQConfig, action_dim: int) -> int:
@@ -141,12 +174,17 @@ class SOMQ(MapLearner):
         self.action_grid, self._distances_a = self._grid(cfg.action_shape)
         n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
         self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
+        spread = grid_actions(cfg.action_shape, self.action_low, self.action_high) \
+            if cfg.action_init == "grid" else None
         for trial, rng in enumerate(self._initial_generators()):
             # Table 1 order: input weights first, then action weights, from one child stream.
             self.input_weights[trial] = self._initial_input_weights(rng)
+            if spread is not None:
+                self.action_weights[trial] = spread
+                continue
             span = self.action_high - self.action_low
             self.action_weights[trial] = self.action_low + span * rng.random((n_a, self.action_dim))
-        self.q = np.zeros((self.n_trials, n_s, n_a))
+        self.q = np.full((self.n_trials, n_s, n_a), cfg.q_init)
         self._open_streams(row_width(cfg, self.action_dim))
         self._interpolated = cfg.response == "interpolated"
         self._wrap = self.action_periodic & cfg.periodic_actions  # all False: the paper's clipped box

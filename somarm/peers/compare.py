@@ -24,9 +24,9 @@ from somarm.io import atomic_write_json
 from somarm.run import evaluation
 
 __all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "ladder", "check", "compare", "peers_missing",
-           "task_defaults"]
+           "peer_budget", "task_defaults"]
 
-OURS = ("somq", "motoric", "tabular")
+OURS = ("somq", "somq+", "motoric", "tabular")
 PEERS = ("td3", "sac")
 LEARNERS = OURS + PEERS
 _PEER_FIELDS = ("learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma", "train_freq",
@@ -43,9 +43,11 @@ class CompareConfig:
     learners: tuple[str, ...] = LEARNERS
     """Learners to train, from somq, motoric, tabular, td3, sac."""
     samples: int = 10_000
-    """Training samples (one-step episodes) for somarm's learners."""
+    """Training samples (steps) for somarm's learners."""
     peer_samples: int | None = None
-    """Training samples for TD3 and SAC (None = ``samples``); they cost about 20 ms each."""
+    """Training samples for TD3 and SAC (None = the Zoo's budget for a ``gym:ID`` it covers, else ``samples``)."""
+    episodes: int = 100
+    """Fresh greedy episodes per score of a ``gym:ID`` task (the last rung's; earlier rungs use a fifth)."""
     seeds: int = 3
     """How many seeds: ``seed .. seed + seeds - 1``, the same for every learner."""
     seed: int = 0
@@ -88,10 +90,20 @@ def task_defaults(task: str) -> tuple[str, int]:
 
 
 def _our_config(kind: str, task: str):
+    """A somarm learner's config on ``task``: its preset's; ``somq+`` takes the preset's ``+`` table where
+    there is one (``table1+`` for reach2) with the interpolated response."""
+    import dataclasses
+
     from somarm.learners import presets
     from somarm.learners.tabular import TabularConfig
 
-    return TabularConfig() if kind == "tabular" else presets.config_for(kind, task_defaults(task)[0])
+    if kind == "tabular":
+        return TabularConfig()
+    preset = task_defaults(task)[0]
+    if kind == "somq+":
+        plus = preset + "+" if preset + "+" in presets.PRESETS else preset
+        return dataclasses.replace(presets.get(plus), response="interpolated")
+    return presets.config_for(kind, preset)
 
 
 def check(config: CompareConfig) -> list[str]:
@@ -113,15 +125,16 @@ def check(config: CompareConfig) -> list[str]:
     unknown = [k for k in config.learners if k not in LEARNERS]
     if unknown or not config.learners:
         raise ValueError(f"unknown learner(s) {', '.join(unknown) or '(none given)'}; allowed: {', '.join(LEARNERS)}")
-    if tasks.record(config.task).episodic:
+    check_int("--episodes", config.episodes)
+    if tasks.record(config.task).episodic and not config.task.startswith("gym:"):
         one_step = [name for name in tasks.names() if not tasks.record(name).episodic]
-        raise ValueError(f"{config.task} has multi-step episodes; compare takes the one-step tasks: "
+        raise ValueError(f"{config.task} has multi-step episodes; compare takes gym:ID and the one-step tasks: "
                          f"{', '.join(one_step)}")
-    task = tasks.make(config.task, **config.task_params)
+    task = _task(config, config.seed)
     for kind in config.learners:
         if kind in OURS:
             try:
-                learners.make(kind, _our_config(kind, config.task), **_bounds(task))
+                learners.make("somq" if kind == "somq+" else kind, _our_config(kind, config.task), **_bounds(task))
             except ValueError as exc:
                 raise ValueError(f"{kind} cannot learn {config.task}: {exc}") from None
     if any(k in PEERS for k in config.learners) and (reason := peers_missing()):
@@ -129,70 +142,158 @@ def check(config: CompareConfig) -> list[str]:
     return list(config.learners)
 
 
-def _score(predict, task, observations: np.ndarray) -> float:
-    """Mean error (minus the mean reward) of a greedy policy on ``observations (n, obs_dim)``."""
-    return float(-task.evaluate(observations, predict(observations)).mean())
+def _params(config: CompareConfig) -> dict[str, Any]:
+    """The task parameters every learner and seed shares: for a ``gym:ID`` task with an unbounded
+    observation Box, its scaling estimated once, from the first seed."""
+    return tasks.record(config.task).complete(tasks.check_params(config.task, config.task_params), config.seed)
 
 
-def _run_ours(kind: str, config: CompareConfig, seed: int, rungs: list[int], observations: np.ndarray,
-              *, warm_up: bool = False):
+def _task(config: CompareConfig, seed: int, params: dict[str, Any] | None = None):
+    """The task of one seed (one trial)."""
+    return tasks.make(config.task, seed=seed, **(_params(config) if params is None else params))
+
+
+class _Scorer:
+    """How a greedy policy is scored, the same for every learner, rung and seed.
+
+    A one-step task: the error (minus the mean reward) on fixed fresh observations. A ``gym:ID`` task:
+    the mean undiscounted return of whole greedy episodes from fixed reset seeds (a fifth of them at
+    the rungs before the last). ``policy`` maps the task's observations ``(n, obs_dim)`` (scaled, for
+    a Gymnasium task) to actions ``(n, action_dim)``.
+    """
+
+    def __init__(self, config: CompareConfig, params: dict[str, Any]) -> None:
+        self.task = _task(config, config.seed, params)
+        self.episodic = self.task.episodic
+        rng = evaluation.evaluation_rng(config.eval_seed)
+        if self.episodic:
+            self.starts = self.task.sample_starts(rng, config.episodes)
+        else:
+            self.observations = self.task.sample_observations(rng, config.observations)
+
+    @property
+    def metric(self) -> str:
+        return "return" if self.episodic else "error"
+
+    def __call__(self, policy, *, last: bool = True) -> float:
+        if self.episodic:
+            starts = self.starts if last else self.starts[:max(1, len(self.starts) // 5)]
+            return float(self.task.run_episodes(policy, starts)["returns"].mean())
+        return float(-self.task.evaluate(self.observations, policy(self.observations)).mean())
+
+    def random(self, seed: int) -> float:
+        """The score of uniformly random actions."""
+        rng = np.random.default_rng(seed)
+        low, high = self.task.action_low, self.task.action_high
+        return self(lambda x: rng.uniform(low, high, (len(x), low.size)))
+
+
+def _train_ours(task, learner, steps: int) -> None:
+    """``steps`` training steps of one learner on its task (one trial)."""
+    if task.episodic:
+        for _ in range(steps):
+            actions = learner.act(task.reset())
+            rewards = task.step(actions)
+            learner.learn(rewards, task.next_observations, task.terminal)
+    else:
+        for _ in range(steps):
+            learner.learn(task.step(learner.act(task.reset())))
+
+
+def _run_ours(kind: str, config: CompareConfig, seed: int, rungs: list[int], score: _Scorer,
+              params: dict[str, Any], *, warm_up: bool = False):
     from somarm import learners
 
-    task = tasks.make(config.task, seed=seed, **config.task_params)
+    task = _task(config, seed, params)
     settings = _our_config(kind, config.task)
-    learner = learners.make(kind, settings, **_bounds(task), seed=seed)
+    make = "somq" if kind == "somq+" else kind
+    learner = learners.make(make, settings, **_bounds(task), seed=seed)
     if warm_up:  # untimed: numba compiles SOM-Q's kernels on first use
-        spare = learners.make(kind, settings, **_bounds(task), seed=seed)
-        spare.learn(task.evaluate(observations[:1], spare.act(observations[:1])))
-        spare.predict(observations[None, :2])
-    errors, walls, wall, done = [], [], 0.0, 0
+        spare = learners.make(make, settings, **_bounds(task), seed=seed)
+        _train_ours(_task(config, seed, params), spare, 2)
+        spare.predict(task.observation_low[None, None, :])
+    values, walls, wall, done = [], [], 0.0, 0
     for rung in rungs:
         start = time.perf_counter()
-        for _ in range(rung - done):
-            learner.learn(task.step(learner.act(task.reset())))
+        _train_ours(task, learner, rung - done)
         wall += time.perf_counter() - start
         done = rung
         task.set_step(done)  # moving goals (four_goals): score in the phase reached
-        errors.append(_score(lambda x: learner.predict(x[None])[0], task, observations))
+        score.task.set_step(done)
+        values.append(score(lambda x: learner.predict(x[None])[0], last=rung == rungs[-1]))
         walls.append(wall)
-    return errors, walls, settings.to_dict()
+    return values, walls, settings.to_dict()
 
 
-def _run_peer(kind: str, config: CompareConfig, seed: int, rungs: list[int], observations: np.ndarray,
-              *, warm_up: bool = False):
+def _peer_env(config: CompareConfig, params: dict[str, Any]):
+    """The Gymnasium environment TD3 and SAC train on, and how it is described in ``compare.json``."""
     import gymnasium
+
+    from somarm.peers.gym import env_id
+
+    if config.task.startswith("gym:"):
+        keywords = {k: v for k, v in params.items() if k not in ("observation_low", "observation_high")}
+        return gymnasium.make(config.task[4:], **keywords), config.task[4:] + " (its own observations and actions)"
+    return (gymnasium.make(env_id(config.task), **params),
+            env_id(config.task) + " (actions in [-1, 1] mapped to the task's box)")
+
+
+def peer_budget(kind: str, config: CompareConfig) -> int:
+    """TD3's or SAC's training samples: ``peer_samples``, else the Zoo's budget for a ``gym:ID`` it
+    covers, else ``samples``."""
+    if config.peer_samples:
+        return config.peer_samples
+    if config.task.startswith("gym:"):
+        from somarm.peers import zoo
+
+        entry = zoo.zoo_entry(kind, config.task[4:])
+        if entry is not None:
+            return int(entry["n_timesteps"])
+    return config.samples
+
+
+def _run_peer(kind: str, config: CompareConfig, seed: int, rungs: list[int], score: _Scorer,
+              params: dict[str, Any], *, warm_up: bool = False):
     import stable_baselines3
     import torch
 
-    from somarm.peers.gym import env_id, to_task_actions
+    from somarm.peers import zoo
+    from somarm.peers.gym import to_task_actions
 
     torch.set_num_threads(1)
-    env = gymnasium.make(env_id(config.task), **config.task_params)
+    env, described = _peer_env(config, params)
     algorithm = {"td3": stable_baselines3.TD3, "sac": stable_baselines3.SAC}[kind]
+    if config.task.startswith("gym:"):
+        keywords, _, source = zoo.settings(kind, config.task[4:], env.action_space.shape[0])
+    else:
+        keywords, source = zoo.defaults(kind, env.action_space.shape[0])
     if warm_up:  # untimed: torch builds its kernels on the first gradient step
         algorithm("MlpPolicy", env, seed=seed, device="cpu", learning_starts=1, batch_size=2).learn(3)
-    model = algorithm("MlpPolicy", env, seed=seed, device="cpu")
-    task = env.unwrapped.task
+    model = algorithm("MlpPolicy", env, seed=seed, device="cpu", **keywords)
+    task = score.task
 
     def predict(x: np.ndarray) -> np.ndarray:
+        if task.episodic:  # a Gymnasium task: the model acts on the environment's own observations
+            actions, _ = model.predict(task.unscale(x).astype(env.observation_space.dtype), deterministic=True)
+            return np.clip(np.asarray(actions, dtype=np.float64), task.action_low, task.action_high)
         actions, _ = model.predict(x.astype(np.float32), deterministic=True)
         return to_task_actions(actions, task.action_low, task.action_high)
 
-    errors, walls, wall, done = [], [], 0.0, 0
+    values, walls, wall, done = [], [], 0.0, 0
     for rung in rungs:
         start = time.perf_counter()
         model.learn(total_timesteps=rung - done, reset_num_timesteps=done == 0)
         wall += time.perf_counter() - start
         done = rung
-        errors.append(_score(predict, env.unwrapped.task, observations))
+        values.append(score(predict, last=rung == rungs[-1]))
         walls.append(wall)
     settings = {name: repr(getattr(model, name)) for name in _PEER_FIELDS if hasattr(model, name)}
     settings.update(policy="MlpPolicy", net_arch=repr(model.policy.net_arch if hasattr(model.policy, "net_arch")
-                                                       else None), torch_threads=1,
+                                                       else None), torch_threads=1, source=source,
                     stable_baselines3=stable_baselines3.__version__, torch=torch.__version__,
-                    environment=env_id(config.task) + " (actions in [-1, 1] mapped to the task's box)")
+                    environment=described)
     env.close()
-    return errors, walls, settings
+    return values, walls, settings
 
 
 def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[str, Any]:
@@ -202,8 +303,9 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[
     finished (``"complete": false``).
 
     Returns:
-      The ``compare.json`` content: per learner ``samples`` (the ladder), ``error`` (rung x seed),
-      ``wall_seconds`` (rung x seed, training only), ``seconds_per_sample`` and ``settings``.
+      The ``compare.json`` content: per learner ``samples`` (the ladder), ``error`` (rung x seed; for a
+      ``gym:ID`` task ``return``), ``wall_seconds`` (rung x seed, training only),
+      ``seconds_per_sample`` and ``settings``.
 
     Raises:
       ValueError: as ``check``. KeyboardInterrupt: after writing what finished.
@@ -212,33 +314,32 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[
     from somarm.peers.figure import compare_figure  # matplotlib loads only when a figure is drawn
 
     learners = check(config)
-    eval_task = tasks.make(config.task, **config.task_params)
-    observations = eval_task.sample_observations(evaluation.evaluation_rng(config.eval_seed), config.observations)
-    rng = np.random.default_rng(config.eval_seed)
-    random_actions = rng.uniform(eval_task.action_low, eval_task.action_high, (len(observations), eval_task.action_dim))
+    params = _params(config)
+    score = _Scorer(config, params)
     result: dict[str, Any] = {
-        "task": config.task, "task_params": config.task_params, "seeds": list(range(config.seed, config.seed + config.seeds)),
-        "observations": config.observations, "eval_seed": config.eval_seed,
-        "random_action_error": float(-eval_task.evaluate(observations, random_actions).mean()),
+        "task": config.task, "task_params": params, "seeds": list(range(config.seed, config.seed + config.seeds)),
+        "eval_seed": config.eval_seed, "metric": score.metric,
+        f"random_action_{score.metric}": score.random(config.eval_seed),
         "somarm_version": __version__, "complete": False, "learners": {},
     }
+    result.update({"episodes": config.episodes} if score.episodic else {"observations": config.observations})
     out.mkdir(parents=True, exist_ok=True)
     for kind in learners:
-        samples = config.peer_samples if kind in PEERS and config.peer_samples else config.samples
+        samples = peer_budget(kind, config) if kind in PEERS else config.samples
         rungs = ladder(samples)
         runner = _run_peer if kind in PEERS else _run_ours
-        errors, walls, settings = [], [], {}
+        values, walls, settings = [], [], {}
         for seed in range(config.seed, config.seed + config.seeds):
-            e, w, settings = runner(kind, config, seed, rungs, observations, warm_up=seed == 0)
-            errors.append(e)
+            v, w, settings = runner(kind, config, seed, rungs, score, params, warm_up=seed == config.seed)
+            values.append(v)
             walls.append(w)
             if progress:
                 print(f"{config.task}/{kind} seed {seed}: {samples} samples in {w[-1]:.1f} s, "
-                      f"greedy error {e[-1]:.4g}", file=sys.stderr, flush=True)
+                      f"greedy {score.metric} {v[-1]:.4g}", file=sys.stderr, flush=True)
         walls_array = np.array(walls)
         result["learners"][kind] = {
             "samples": rungs,
-            "error": np.array(errors).T.tolist(),
+            score.metric: np.array(values).T.tolist(),
             "wall_seconds": walls_array.T.tolist(),
             "seconds_per_sample": (walls_array[:, -1] / samples).tolist(),
             "settings": settings,

@@ -12,24 +12,26 @@ from somarm.plots import pyplot, save
 __all__ = ["NAMES", "COLOURS", "compare_figure"]
 
 #: How each learner is named in figures and tables.
-NAMES = {"somq": "SOM-Q", "motoric": "Motoric Map", "tabular": "tabular (fixed grid)",
-         "td3": "SB3 TD3", "sac": "SB3 SAC"}
+NAMES = {"somq": "SOM-Q", "somq+": "SOM-Q+ (interpolated)", "motoric": "Motoric Map",
+         "tabular": "tabular (fixed grid)", "td3": "SB3 TD3", "sac": "SB3 SAC"}
 #: One colour per learner, the same in every figure.
-COLOURS = {"somq": "C0", "motoric": "C1", "tabular": "C2", "td3": "C3", "sac": "C4"}
+COLOURS = {"somq": "C0", "somq+": "C5", "motoric": "C1", "tabular": "C2", "td3": "C3", "sac": "C4"}
 
 plt = pyplot()
 
 
 def compare_figure(result: dict[str, Any], path: str | Path) -> Path:
-    """Two panels from a ``compare.json`` dict: median error over seeds (band: min to max).
+    """Two panels from a ``compare.json`` dict: median error (for a ``gym:ID`` task: return) over seeds
+    (band: min to max).
 
     Left, against training samples; right, against training wall time (each seed's own times,
-    their median per rung). The dashed line is the error of uniformly random actions.
+    their median per rung). The dashed line is the score of uniformly random actions.
     """
+    metric = result.get("metric", "error")
     fig, (by_samples, by_time) = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     order = list(NAMES)  # the same legend order in every figure, also when read back from JSON
     for kind, data in sorted(result["learners"].items(), key=lambda item: order.index(item[0])):
-        errors = np.array(data["error"])  # (rungs, seeds)
+        errors = np.array(data[metric])  # (rungs, seeds)
         samples = np.array(data["samples"])
         walls = np.median(np.array(data["wall_seconds"]), axis=1)
         median, low, high = np.median(errors, axis=1), errors.min(axis=1), errors.max(axis=1)
@@ -38,13 +40,15 @@ def compare_figure(result: dict[str, Any], path: str | Path) -> Path:
             ax.plot(x, median, "o-", color=COLOURS.get(kind, "k"), label=label, ms=3)
             ax.fill_between(x, low, high, color=COLOURS.get(kind, "k"), alpha=0.15, lw=0)
     for ax in (by_samples, by_time):
-        ax.axhline(result["random_action_error"], color="grey", ls="--", lw=1, label="random actions")
+        ax.axhline(result[f"random_action_{metric}"], color="grey", ls="--", lw=1, label="random actions")
         ax.set_xscale("log")
-        ax.set_yscale("log")
+        if metric == "error":
+            ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
     by_samples.set_xlabel("training samples")
     by_time.set_xlabel("training wall time (s)")
-    by_samples.set_ylabel(f"greedy error on {result['observations']} fresh observations")
+    by_samples.set_ylabel(f"greedy error on {result['observations']} fresh observations" if metric == "error"
+                          else f"greedy return per episode ({result['episodes']} fresh episodes at the end)")
     by_samples.legend(fontsize=8)
     fig.suptitle(f"{result['task']}: median over {len(result['seeds'])} seeds (band: min to max)")
     return save(fig, path)

@@ -19,7 +19,7 @@ __all__ = ["TASKS", "train", "measure", "peers", "table"]
 #: The tasks of the part and the learners run on each (a fixed grid cannot take reach20's 20 angles).
 TASKS: dict[str, tuple[str, ...]] = {
     "reach2": compare.LEARNERS,
-    "reach20": ("somq", "motoric", "td3", "sac"),
+    "reach20": ("somq", "somq+", "motoric", "td3", "sac"),
     "throw_distance": compare.LEARNERS,
 }
 #: The tasks whose action space is small enough for a fixed grid.
@@ -40,6 +40,27 @@ def table(result: dict) -> list[str]:
         lines.append(f"| {rung} | " + " | ".join(cells) + " |")
     per_sample = [f"{1e3 * float(np.median(result['learners'][k]['seconds_per_sample'])):.3g}" for k in kinds]
     lines.append("| ms per sample | " + " | ".join(per_sample) + " |")
+    return lines
+
+
+#: The greedy errors whose time to reach the time-to-error table gives.
+THRESHOLDS = (0.05, 0.02, 0.01)
+
+
+def time_to_error(result: dict) -> list[str]:
+    """Markdown rows: per learner, the training seconds (and samples) at the first rung whose median
+    error over seeds is at most each of ``THRESHOLDS`` (median of the seeds' wall times there)."""
+    lines = ["| learner | " + " | ".join(f"error <= {t}" for t in THRESHOLDS) + " |",
+             "|---" * (len(THRESHOLDS) + 1) + "|"]
+    for kind, data in result["learners"].items():
+        medians = np.median(np.array(data["error"]), axis=1)
+        walls = np.median(np.array(data["wall_seconds"]), axis=1)
+        cells = []
+        for threshold in THRESHOLDS:
+            reached = np.flatnonzero(medians <= threshold)
+            cells.append(f"{fmt(float(walls[reached[0]]), 2)} s ({fmt(data['samples'][reached[0]])} samples)"
+                         if reached.size else "not reached")
+        lines.append(f"| {NAMES[kind]} | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -118,7 +139,8 @@ def _notes(results: dict[str, dict], m: dict, seeds: int) -> list[str]:
         notes += ["", f"`{task}`: median greedy error over {seeds} seed(s) on the same "
                   f"{result['observations']} fresh observations (random actions score "
                   f"{fmt(result['random_action_error'], 2)}); full data in `peers/{task}/compare.json`.", "",
-                  *table(result)]
+                  *table(result), "", f"Time to a greedy error on `{task}` (training wall time, median over seeds):",
+                  "", *time_to_error(result)]
     for task, cost in m["cost"].items():
         notes += ["", f"Cost per sample on `{task}`: TD3 {cost['td3'] / cost['somq']:.3g} x and SAC "
                   f"{cost['sac'] / cost['somq']:.3g} x SOM-Q's (same run, same machine)."]
@@ -126,7 +148,8 @@ def _notes(results: dict[str, dict], m: dict, seeds: int) -> list[str]:
 
 
 def peers(ctx: Context) -> Section:
-    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time.
+    """Every learner on reach2, reach20 and throw_distance: error against samples and wall time, and the
+    time each takes to reach a greedy error of 0.05, 0.02 and 0.01.
 
     Args:
       ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
@@ -138,7 +161,7 @@ def peers(ctx: Context) -> Section:
       KeyboardInterrupt: the training was stopped (Ctrl-C during ``somarm.peers.compare``).
       ValueError: a figure cannot be written (a full disk), in one line naming it.
     """
-    seeds, peer_samples = ctx.pick(2, 1), ctx.pick(1000, 120)
+    seeds, peer_samples = ctx.pick(2, 1), ctx.pick(10_000, 120)
     budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
     results = train(ctx, budgets, seeds, peer_samples)
     m = measure(results)
@@ -151,8 +174,11 @@ def peers(ctx: Context) -> Section:
         f"{', '.join(f'{fmt(n)} samples on {t}' for t, n in budgets.items())}"
         f"{'' if ctx.quick else ' (the tasks default run lengths)'}, TD3 and SAC for "
         f"{peer_samples} samples (each costs a gradient step); {seeds} seed(s), the same for every learner.",
-        "TD3 and SAC use Stable-Baselines3's defaults (MlpPolicy, torch on one thread) through `somarm.peers.gym`; "
-        "every setting is written into each `compare.json`.",
+        "TD3 and SAC use Stable-Baselines3's defaults (MlpPolicy, torch on one thread) through `somarm.peers.gym`, "
+        "TD3 with Gaussian action noise of sd 0.1 on its [-1, 1] actions (SB3's TD3 adds none by default); every "
+        "setting is written into each `compare.json`.",
+        "SOM-Q+ is the task's `+` preset (`table1+` on the arms, `table5+` on the throw) with the interpolated "
+        "response (`somarm.learners.interpolation`), trained for the same samples as SOM-Q.",
         "The tabular learner: 16 cells per observation dimension, 16 actions per action dimension, sample-mean Q, "
         "epsilon = 1/(t/1000 + 1) (as SOM-Q's p in Table 1).",
         "Error is minus the mean reward on the same fresh observations for every learner (the evaluation stream).",

@@ -14,6 +14,7 @@ from somarm import __version__
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.peers.compare import peers_missing
 from somarm.reproduce import (
+    benchmarks,
     beyond,
     delayed,
     four_goals,
@@ -28,7 +29,7 @@ from somarm.reproduce import (
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section, claim_record, render
 from somarm.reproduce.sizes import check_seeds
-from somarm.tasks.base import BACKENDS
+from somarm.tasks.record import OWN_BACKENDS
 from somarm.validation import check_int
 
 __all__ = ["EXPERIMENTS", "OPTIONAL", "check_names", "check_request", "default_jobs", "reproduce", "load_claims"]
@@ -48,7 +49,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
 }
 
 #: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
-OPTIONAL: dict[str, Callable[[Context], Section]] = {"peers": peers.peers}
+OPTIONAL: dict[str, Callable[[Context], Section]] = {"peers": peers.peers, "benchmarks": benchmarks.benchmarks}
 
 
 def check_names(only: list[str] | None) -> list[str]:
@@ -57,7 +58,7 @@ def check_names(only: list[str] | None) -> list[str]:
     unknown = [n for n in names if n not in EXPERIMENTS and n not in OPTIONAL]
     if unknown:
         raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join([*EXPERIMENTS, *OPTIONAL])}")
-    if "peers" in names and (reason := peers_missing()):
+    if {"peers", "benchmarks"} & set(names) and (reason := peers_missing()):
         raise ValueError(reason)
     return names
 
@@ -81,8 +82,8 @@ def check_request(only: list[str] | None, *, quick: bool, seed: int, seeds: int,
     names = check_names(only)
     check_int("--seeds", seeds)
     check_int("--jobs", jobs)
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+    if backend not in OWN_BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; allowed: {', '.join(OWN_BACKENDS)}")
     check_seeds({n: {**EXPERIMENTS, **OPTIONAL}[n] for n in names}, quick=quick, seed=seed, seeds=seeds,
                 backend=backend)
     return names

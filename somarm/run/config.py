@@ -40,7 +40,7 @@ class RunConfig:
     Each field's metadata gives its ``somarm train`` option; ``add_options`` reads them.
     """
 
-    task: str = field(metadata=_option("task", "task name (see `somarm tasks`)"))
+    task: str = field(metadata=_option("task", "task name (see `somarm tasks`), or gym:ID for a Gymnasium environment"))
     """Registered task name (``somarm tasks`` lists them)."""
     learner: str = field(default="somq", metadata=_option(
         "--learner", "learner kind: somq (the paper's model), motoric (the Fig. 13 B baseline) or tabular (a fixed grid)",
@@ -69,11 +69,12 @@ class RunConfig:
     """Training steps (one-step episodes); None takes the task's default."""
     seed: int = field(default=0, metadata=_option("--seed", "the run's seed", type=whole_number, metavar="S"))
     """The run's seed: every random number of the run derives from it."""
-    backend: str = field(default="mujoco", metadata=_option(
-        "--backend", f"where rewards are computed: {' or '.join(BACKENDS)} (a task's record says which it takes)",
-        metavar="NAME"))
-    """Where rewards are computed: ``mujoco`` (default) or ``analytic`` (``tasks.BACKENDS``; each task's
-    record lists the ones it takes)."""
+    backend: str | None = field(default=None, metadata=_option(
+        "--backend", f"where rewards are computed: {', '.join(BACKENDS)} (a task's record says which it "
+        "takes; default its first: mujoco, or gymnasium for gym:ID)", metavar="NAME"))
+    """Where rewards are computed: ``mujoco``, ``analytic`` or ``gymnasium`` (``tasks.BACKENDS``; each
+    task's record lists the ones it takes); None takes the task's first (``mujoco``; ``gymnasium`` for a
+    ``gym:ID`` task)."""
     block: int = field(default=100, metadata=_option("--block", "steps per learning-curve point", type=whole_number, metavar="N"))
     """Steps per recorded point of the learning curves (mean reward over the block)."""
     trial_ids: list[int] | None = field(default=None, metadata=_option(
@@ -104,7 +105,7 @@ class RunConfig:
             raise ValueError(f"trial_ids must be a list of whole numbers or None, got {type(ids).__name__}")
         record = tasks.record(self.task)
         config_type = _config_class(self.learner)
-        tasks.check_backend(self.task, self.backend)
+        backend = tasks.check_backend(self.task, self.backend)
         if self.preset is not None:
             presets.get(self.preset)  # an unknown table is named even beside a learner_config
         if self.learner_config is None:
@@ -121,7 +122,8 @@ class RunConfig:
             learner_config=base.with_changes(self.overrides),
             n_steps=self.n_steps if self.n_steps is not None else record.n_steps,
             overrides=dict(self.overrides),
-            task_params=tasks.check_params(self.task, self.task_params),
+            task_params=record.complete(tasks.check_params(self.task, self.task_params), self.seed),
+            backend=backend,
         )
         # Named by their somarm train flags: that is where a user meets them.
         check_int("--trials", resolved.n_trials)

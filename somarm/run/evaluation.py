@@ -62,8 +62,9 @@ def evaluation_bytes(learner: Learner, n_observations: int) -> float:
 def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 100, seed: int = 0) -> dict[str, np.ndarray]:
     """Each trial's greedy policy run for whole episodes of a multi-step task (``task.episodic``).
 
-    Every trial starts the same ``n_episodes`` start poses (the evaluation stream of ``seed``);
-    all ``n_trials x n_episodes`` episodes run in one batch.
+    Every trial starts the same ``n_episodes`` episodes (``task.sample_starts`` from the evaluation
+    stream of ``seed``: start poses, or a Gymnasium environment's reset seeds); all ``n_trials x
+    n_episodes`` episodes run in one batch.
 
     Args:
       learner: a trained learner with ``n_trials`` trials.
@@ -73,7 +74,7 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
 
     Returns:
       ``{"success_rate", "mean_length", "mean_return"}``, each ``(n_trials,)``: the fraction of
-      episodes that reach the goal; the mean steps over all episodes, a failed episode counting at
+      episodes that reach the goal (only for a task with a goal); the mean steps over all episodes, a failed episode counting at
       the step limit (where ``run_episodes`` cuts it); and the mean undiscounted return per episode.
       A trial that reaches the goal once in 100 episodes thus has a mean length near the step limit,
       not the length of its one success.
@@ -84,15 +85,17 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
     if not task.episodic:
         raise ValueError(f"task {task.name} has one-step episodes; greedy episodes need a multi-step task")
     n_episodes = check_int("n_episodes", n_episodes)
-    starts = task.sample_observations(evaluation_rng(seed), n_episodes)
+    starts = task.sample_starts(evaluation_rng(seed), n_episodes)
     n_trials = learner.n_trials
 
-    def policy(angles: np.ndarray) -> np.ndarray:
-        return learner.predict(angles.reshape(n_trials, n_episodes, -1)).reshape(len(angles), -1)
+    def policy(observations: np.ndarray) -> np.ndarray:
+        return learner.predict(observations.reshape(n_trials, n_episodes, -1)).reshape(len(observations), -1)
 
-    episodes = task.run_episodes(policy, np.tile(starts, (n_trials, 1)))
-    return {
-        "success_rate": episodes["success"].reshape(n_trials, n_episodes).mean(axis=1),
+    episodes = task.run_episodes(policy, np.tile(starts, (n_trials,) + (1,) * (starts.ndim - 1)))
+    out = {
         "mean_length": episodes["length"].reshape(n_trials, n_episodes).mean(axis=1),
         "mean_return": episodes["returns"].reshape(n_trials, n_episodes).mean(axis=1),
     }
+    if "success" in episodes:  # a task with a goal says whether each episode reached it
+        out["success_rate"] = episodes["success"].reshape(n_trials, n_episodes).mean(axis=1)
+    return out

@@ -48,7 +48,7 @@ def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
                                                   {**config.to_dict(), "somarm_version": __version__})),
         ("curves.npz", lambda: atomic_save_npz(out / "curves.npz", block_means=result.block_means,
                                                block_sq_means=result.block_sq_means, block=config.block,
-                                               steps=result.steps, seed=config.seed)),
+                                               steps=result.steps, seed=config.seed, **_episode_arrays(result))),
         ("summary.json", lambda: atomic_write_json(out / "summary.json", data)),
     ]
     if figures and result.steps_done > 0:
@@ -64,6 +64,16 @@ def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
             raise ValueError(f"{exc} ({kept})") from None
         written.append(name)
     return out
+
+
+def _episode_arrays(result: RunResult) -> dict[str, np.ndarray]:
+    """A multi-step run's training episodes for ``curves.npz``: when each ended (step), its trial, its
+    return and length, and the mean return per block and trial (NaN where none ended)."""
+    if result.episodes is None:
+        return {}
+    episodes = result.episodes
+    return {"episode_ends": episodes.ends, "episode_trials": episodes.trials, "episode_returns": episodes.returns,
+            "episode_lengths": episodes.lengths, "block_returns": result.block_returns}
 
 
 def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:

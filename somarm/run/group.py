@@ -10,7 +10,7 @@ import numpy as np
 from somarm.protocols import BatchedTask, Learner
 from somarm.run.build import check_memory_needs, make_learner, make_task
 from somarm.run.config import RunConfig
-from somarm.run.loop import StepHook, loop
+from somarm.run.loop import Episodes, StepHook, loop
 from somarm.validation import check_int
 
 __all__ = ["RunResult", "train", "train_group", "share_lanes", "RunGroup"]
@@ -30,6 +30,16 @@ class RunResult:
     interrupted: bool = False
     snapshots: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
     """Copies of the maps (and Q) of every trial taken after the steps asked for in ``train``."""
+    episodes: Episodes | None = None
+    """The training episodes that ended (a multi-step task's; None for one-step tasks)."""
+
+    @property
+    def block_returns(self) -> np.ndarray | None:
+        """Mean return of the training episodes that ended in each block, ``(n_blocks, n_trials)``
+        (NaN where none ended); None for a one-step task."""
+        if self.episodes is None:
+            return None
+        return self.episodes.block_returns(len(self.block_means), self.config.block, self.config.n_trials)
 
     @property
     def steps(self) -> np.ndarray:
@@ -177,5 +187,6 @@ class RunGroup:
                 wall_time=curves.wall_time,
                 interrupted=curves.interrupted,
                 snapshots=taken,
+                episodes=None if curves.episodes is None or not own_task.episodic else curves.episodes.of(column),
             ))
         return results

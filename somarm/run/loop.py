@@ -24,7 +24,7 @@ from somarm.run.stopping import stop_between_steps
 from somarm.tasks.base import step_together
 from somarm.tasks.pool import single_threaded
 
-__all__ = ["Curves", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards"]
+__all__ = ["Curves", "Episodes", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards"]
 
 StepHook = Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]
 
@@ -45,6 +45,69 @@ class Curves:
     interrupted: bool = False
     snapshots: list[dict[int, dict[str, np.ndarray]]] = field(default_factory=list)
     """Per learner: copies of its maps (and Q) after each step asked for."""
+    episodes: Episodes | None = None
+    """Every finished training episode of the multi-step tasks (None: one-step tasks only)."""
+
+
+@dataclass
+class Episodes:
+    """The training episodes that ended, in the order they ended: one entry each."""
+
+    ends: np.ndarray  #: (k,) the step (1-based) at which the episode ended
+    trials: np.ndarray  #: (k,) the curves' column (trial) it belongs to
+    returns: np.ndarray  #: (k,) its undiscounted return
+    lengths: np.ndarray  #: (k,) its steps
+
+    def of(self, columns: slice) -> Episodes:
+        """The episodes of the trials in ``columns``, renumbered from 0."""
+        keep = (self.trials >= columns.start) & (self.trials < columns.stop)
+        return Episodes(self.ends[keep], self.trials[keep] - columns.start, self.returns[keep], self.lengths[keep])
+
+    def block_returns(self, n_blocks: int, block: int, n_trials: int) -> np.ndarray:
+        """Mean return of the episodes that ended in each block, per trial, ``(n_blocks, n_trials)``;
+        NaN where none ended."""
+        total = np.zeros((n_blocks, n_trials))
+        count = np.zeros((n_blocks, n_trials))
+        index = (self.ends - 1) // block
+        keep = index < n_blocks
+        np.add.at(total, (index[keep], self.trials[keep]), self.returns[keep])
+        np.add.at(count, (index[keep], self.trials[keep]), 1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+class _EpisodeLog:
+    """Collects the training episodes of the multi-step tasks as they end (``Episodes``)."""
+
+    def __init__(self, tasks: list[BatchedTask]) -> None:
+        self.tasks = tasks
+        self.offsets = np.cumsum([0] + [t.n_trials for t in tasks])
+        self.returns = np.zeros(int(self.offsets[-1]))
+        self.lengths = np.zeros(int(self.offsets[-1]), dtype=np.int64)
+        self.ended: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def record(self, step: int, rewards: np.ndarray) -> None:
+        """Add a step's rewards (all trials side by side) and close the episodes that ended there."""
+        self.returns += rewards
+        self.lengths += 1
+        for k, task in enumerate(self.tasks):
+            if not task.episodic:
+                continue
+            done = cast(EpisodicTask, task)
+            over = np.flatnonzero(done.terminal | done.truncated) + self.offsets[k]
+            if over.size:
+                self.ended.append((step, over, self.returns[over].copy(), self.lengths[over].copy()))
+                self.returns[over] = 0.0
+                self.lengths[over] = 0
+
+    def episodes(self) -> Episodes:
+        if not self.ended:
+            empty = np.zeros(0)
+            return Episodes(empty.astype(np.int64), empty.astype(np.int64), empty, empty.astype(np.int64))
+        return Episodes(np.concatenate([np.full(len(o), s) for s, o, _, _ in self.ended]).astype(np.int64),
+                        np.concatenate([o for _, o, _, _ in self.ended]).astype(np.int64),
+                        np.concatenate([r for _, _, r, _ in self.ended]),
+                        np.concatenate([n for _, _, _, n in self.ended]).astype(np.int64))
 
 
 def loop(
@@ -105,7 +168,8 @@ def loop(
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in learners]
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
-    episodic = [t.episodic for t in tasks]  # multi-step episodes (reach2_obstacle): EpisodicTasks
+    episodic = [t.episodic for t in tasks]  # multi-step episodes (reach2_obstacle, gym:ID): EpisodicTasks
+    log = _EpisodeLog(tasks) if any(episodic) else None
     # The lanes other than the first run in their own threads; each owns its tasks and learners,
     # so every trial sees the same arithmetic in the same order as with one lane. Whether a step
     # is faster in lanes or in this thread alone (all tasks, one physics call on the batch's own
@@ -156,6 +220,8 @@ def loop(
                 accumulated += rewards
                 accumulated_sq += rewards * rewards
                 step += 1
+                if log is not None:
+                    log.record(step, rewards)
                 if on_step is not None:
                     on_step(step, observations[0], actions[0], rewards)
                 if step % block == 0:
@@ -177,7 +243,8 @@ def loop(
     wall_time = time.perf_counter() - start
     bar.close(step, last_mean)
     done = step // block
-    return Curves(block_means[:done], block_sq_means[:done], step, wall_time, interrupted, snapshots)
+    return Curves(block_means[:done], block_sq_means[:done], step, wall_time, interrupted, snapshots,
+                  None if log is None else log.episodes())
 
 
 class _LanePolicy:

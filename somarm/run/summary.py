@@ -26,7 +26,7 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
     ``GREEDY_EPISODES`` whole greedy episodes per trial instead, since one step from rest says
     nothing of where an episode goes: ``greedy_mean_return`` and ``greedy_sd_return`` (the
     undiscounted return per episode, mean over episodes per trial, then mean and sd over trials),
-    ``greedy_success_rate`` (episodes reaching the goal, over all trials), and
+    ``greedy_success_rate`` (episodes reaching the goal, over all trials; a task with a goal only), and
     ``greedy_mean_episode_length`` (steps over all episodes, a failed episode counting at the step
     limit), ``greedy_episodes``.
 
@@ -37,13 +37,15 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
 
     if task.episodic:
         episodes = evaluation.greedy_episodes(learner, task, n_episodes=GREEDY_EPISODES, seed=seed)
-        return {
+        out = {
             "greedy_mean_return": float(episodes["mean_return"].mean()),
             "greedy_sd_return": float(episodes["mean_return"].std()),
-            "greedy_success_rate": float(episodes["success_rate"].mean()),
             "greedy_mean_episode_length": float(episodes["mean_length"].mean()),
             "greedy_episodes": GREEDY_EPISODES,
         }
+        if "success_rate" in episodes:
+            out["greedy_success_rate"] = float(episodes["success_rate"].mean())
+        return out
     greedy = evaluation.evaluate_greedy(learner, task, n_observations=n_observations, seed=seed)
     return {
         "greedy_mean_reward": float(greedy.mean()),

@@ -16,7 +16,6 @@ package is light: the task modules, and with them MuJoCo and dm_control, load on
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import json
 from typing import Any
@@ -51,8 +50,13 @@ def record(name: str) -> TaskRecord:
     Raises:
       ValueError: unknown name (the names are listed).
     """
+    if isinstance(name, str) and name.startswith("gym:"):
+        from somarm.tasks import gym_envs
+
+        return gym_envs.record_for(name)
     if name not in records():
-        raise ValueError(f"unknown task {name!r}; tasks: {', '.join(records())}")
+        raise ValueError(f"unknown task {name!r}; tasks: {', '.join(records())}, or gym:ID for a "
+                         "Gymnasium environment (gym:Pendulum-v1)")
     return _RECORDS[name]
 
 
@@ -87,28 +91,20 @@ def check_params(name: str, params: dict[str, Any]) -> dict[str, Any]:
       ValueError: an unknown parameter, text where a value is wanted (``"0.2"`` for ``0.2``: read
         text with ``parse_params``) or a value the params class refuses (one line).
     """
-    entry = record(name)
-    entry.check_settable(params)
-    texts = entry.text_fields()
-    kinds = {field.name: str(field.type) for field in dataclasses.fields(entry.params)}
-    for key, value in params.items():
-        if isinstance(value, str) and key not in texts:
-            kind = kinds[key]
-            wanted = ("true or false" if "bool" in kind else "a JSON list, such as [[0.3, 0.7]]"
-                      if "tuple" in kind or "list" in kind else "a number written with the digits 0-9"
-                      if "float" in kind or "int" in kind else "a JSON value")
-            raise ValueError(f"task parameter {key} of {name} takes {wanted}, got the text {value!r}")
-    entry.params_from(params)
+    record(name).check_values(params)
     return dict(params)
 
 
-def check_backend(name: str, backend: str) -> str:
-    """``backend`` if task ``name`` can compute its rewards there (its record's ``backends``).
+def check_backend(name: str, backend: str | None) -> str:
+    """``backend`` if task ``name`` can compute its rewards there (its record's ``backends``); None gives
+    the task's first.
 
     Raises:
       ValueError: an unknown backend, or one the task lacks (one line naming the task's backends).
     """
     entry = record(name)
+    if backend is None:
+        return entry.backends[0]
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
     if backend not in entry.backends:
@@ -116,7 +112,7 @@ def check_backend(name: str, backend: str) -> str:
     return backend
 
 
-def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend: str = "mujoco",
+def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend: str | None = None,
          **params: Any):
     """A batched task (``somarm.protocols.BatchedTask``) for ``n_trials`` independent trials.
 
@@ -125,13 +121,15 @@ def make(name: str, *, n_trials: int = 1, seed: int = 0, trial_ids=None, backend
       n_trials: independent trials stepped together.
       seed: the run's seed; trial i's observations come from stream (seed, "task", trial id).
       trial_ids: explicit trial indices (e.g. ``[7]`` replays trial 7 alone).
-      backend: "mujoco" (default) or "analytic" (closed forms).
+      backend: "mujoco", "analytic" (closed forms) or "gymnasium" (``gym:ID``); default the task's first
+        (its record's ``backends``).
       **params: fields of the task's params dataclass (``record(name).params``).
 
     Raises:
       ValueError: unknown task, unknown parameter, parameter out of range, unknown backend.
     """
     entry = record(name)
+    backend = check_backend(name, backend)
     return entry.make(entry.params_from(params), n_trials=n_trials, seed=seed, trial_ids=trial_ids,
                       backend=backend)
 

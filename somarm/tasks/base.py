@@ -19,7 +19,7 @@ from dm_control.rl import control
 from dm_env import specs
 
 from somarm.streams import UniformStreams, trial_ids_for
-from somarm.tasks.record import BACKENDS
+from somarm.tasks.record import BACKENDS, OWN_BACKENDS
 from somarm.validation import real_array
 
 __all__ = ["Backend", "BACKENDS", "TaskBase", "OneStepTask", "OneStepEnvTask", "check_actions", "step_together"]
@@ -88,6 +88,17 @@ class TaskBase:
         """
         return np.zeros(self.action_dim, dtype=np.bool_)
 
+    def batch_actions(self, actions: object) -> np.ndarray:
+        """``actions`` checked as one step of the batch: ``(n_trials, action_dim)``, finite, in the box.
+
+        Raises:
+          ValueError: the wrong shape, NaN or inf, or a value outside the bounds (one line).
+        """
+        actions = check_actions("actions", actions, self.action_low, self.action_high)
+        if actions.shape != (self.n_trials, self.action_dim):
+            raise ValueError(f"actions must have shape ({self.n_trials}, {self.action_dim}), got {actions.shape}")
+        return actions
+
     def set_step(self, t: int) -> None:
         """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase).
 
@@ -115,8 +126,8 @@ class OneStepTask(TaskBase):
 
     def __init__(self, params: Any, *, n_trials: int = 1, seed: int = 0,
                  trial_ids: np.ndarray | None = None, backend: Backend = "mujoco"):
-        if backend not in BACKENDS:
-            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(BACKENDS)}")
+        if backend not in OWN_BACKENDS:
+            raise ValueError(f"unknown backend {backend!r}; backends: {', '.join(OWN_BACKENDS)}")
         self.params = params
         self.backend = backend
         self.trial_ids = trial_ids_for(n_trials, trial_ids)

@@ -193,6 +193,10 @@ class Obstacle(TaskBase):
         """``n`` start observations ``(n, 2)`` drawn with ``rng``."""
         return self.start_poses(rng, n)
 
+    def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` episode starts for ``run_episodes``: start poses ``(n, 2)``."""
+        return self.start_poses(rng, n)
+
     # -- whole episodes --------------------------------------------------------------------
     def run_episodes(self, policy, starts: np.ndarray, *, paths: bool = False) -> dict[str, np.ndarray]:
         """Run episodes from ``starts`` ``(m, 2)`` to the goal or the step limit, all in one batch.

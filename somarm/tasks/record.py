@@ -12,10 +12,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["TaskRecord", "BACKENDS"]
+__all__ = ["TaskRecord", "BACKENDS", "OWN_BACKENDS"]
 
-#: Where a task's rewards can be computed: MuJoCo, or the closed forms of the kinematics and ballistics.
-BACKENDS = ("mujoco", "analytic")
+#: Where a task's rewards can be computed: MuJoCo, the closed forms of the kinematics and ballistics,
+#: or a Gymnasium environment's own ``step`` (the ``gym:ID`` tasks).
+BACKENDS = ("mujoco", "analytic", "gymnasium")
+#: The backends of this project's own tasks (the reproductions take one of these).
+OWN_BACKENDS = ("mujoco", "analytic")
 
 
 @dataclass(frozen=True)
@@ -49,7 +52,7 @@ class TaskRecord:
     """How ``somarm view`` shows a trained learner: ``goals`` (one pose per goal, in turn),
     ``sweep`` (every goal's posture at once, as Fig. 11) or ``fan`` (every action unit thrown at
     once, as Fig. 16)."""
-    backends: tuple[str, ...] = BACKENDS
+    backends: tuple[str, ...] = OWN_BACKENDS
     """Where the rewards can be computed (``make(..., backend=)``); a task without closed forms
     (contacts) has ``mujoco`` only."""
     episodic: bool = False
@@ -77,6 +80,29 @@ class TaskRecord:
         """The parameters whose values are text (a ``str`` or ``Literal`` annotation), e.g. ``dynamics``."""
         return tuple(field.name for field in dataclasses.fields(self.params)
                      if any(word in str(field.type) for word in ("str", "Literal")))
+
+    def check_values(self, params: dict[str, Any]) -> None:
+        """Refuse typed parameters of the wrong type or range (``tasks.check_params``; one line).
+
+        Text is refused where the params class wants a number, a bool or a list (read text with
+        ``tasks.parse_params``); the params class checks the rest.
+        """
+        self.check_settable(params)
+        texts = self.text_fields()
+        kinds = {field.name: str(field.type) for field in dataclasses.fields(self.params)}
+        for key, value in params.items():
+            if isinstance(value, str) and key not in texts:
+                kind = kinds[key]
+                wanted = ("true or false" if "bool" in kind else "a JSON list, such as [[0.3, 0.7]]"
+                          if "tuple" in kind or "list" in kind else "a number written with the digits 0-9"
+                          if "float" in kind or "int" in kind else "a JSON value")
+                raise ValueError(f"task parameter {key} of {self.name} takes {wanted}, got the text {value!r}")
+        self.params_from(params)
+
+    def complete(self, params: dict[str, Any], seed: int) -> dict[str, Any]:
+        """``params`` with whatever a run must fix once and keep in its ``config.json`` filled in (a
+        Gymnasium task's observation scaling); the registered tasks have nothing to add."""
+        return dict(params)
 
     def fields(self) -> tuple[str, ...]:
         """Every field of the params class (settable or not)."""

@@ -9,7 +9,11 @@ by ``somarm.viewer.server``. It differs from ``meshcat-server`` where that one h
   instead of stdout, so the parent never has to keep reading a pipe;
 - nothing is printed per browser connection (meshcat's prints two lines each, which froze
   it once an unread pipe filled up);
-- with ``--live-task`` it draws a task itself from raw training rows (``feed.py``);
+- its page (``/static/``) is somarm's: the task as the title, a favicon, the text overlay
+  (``html.live_page``), and it forwards and remembers the overlay's ``somarm_text`` commands;
+- the bare address ``/`` sends a browser to the page (meshcat answers it with
+  ``Can "Upgrade" only to "WebSocket"``: the websocket lives there too);
+- with ``--live-task`` or ``--live-model`` it draws what training sends it (``feed.py``);
 - a ``batch`` request carries many commands in one round trip (a live frame of the
   20-link arm is about 25 commands);
 - ``wait`` is answered through the zmq stream (meshcat answers on the bare socket, after
@@ -29,6 +33,7 @@ import tornado.httpserver
 import tornado.ioloop
 import tornado.netutil
 import tornado.web
+import umsgpack
 import zmq
 from meshcat.servers.tree import SceneTree, find_node
 from meshcat.servers.zmqserver import (
@@ -41,6 +46,8 @@ from meshcat.servers.zmqserver import (
 )
 
 from somarm.validation import whole_number
+from somarm.viewer.html import FAVICON_SVG, live_page
+from somarm.viewer.text import TEXT_COMMAND
 
 __all__ = ["LoopbackBridge", "main"]
 
@@ -48,21 +55,50 @@ _PARENT_CHECK_MS = 500
 
 
 class _QuietWebSocketHandler(WebSocketHandler):
-    """meshcat's websocket handler without the per-connection prints."""
+    """meshcat's websocket handler without the per-connection prints; a plain GET goes to the page."""
+
+    async def get(self, *args, **kwargs):
+        if self.request.headers.get("Upgrade", "").lower() != "websocket":
+            self.redirect("/static/")
+            return
+        await super().get(*args, **kwargs)
 
     def open(self):
         self.bridge.websocket_pool.add(self)
         self.bridge.send_scene(self)
+        if self.bridge.text:
+            self.write_message(umsgpack.packb(self.bridge.text), binary=True)
 
     def on_close(self):
         self.bridge.websocket_pool.discard(self)
 
 
+class _PageHandler(tornado.web.RequestHandler):
+    """somarm's viewer page (never cached: the title and the overlay are this server's)."""
+
+    def initialize(self, page: str) -> None:
+        self.page = page
+
+    def get(self, *args):
+        self.set_header("Cache-Control", "no-store")
+        self.set_header("Content-Type", "text/html; charset=utf-8")
+        self.write(self.page)
+
+
+class _IconHandler(tornado.web.RequestHandler):
+    def get(self):
+        self.set_header("Content-Type", "image/svg+xml")
+        self.set_header("Cache-Control", "max-age=86400")
+        self.write(FAVICON_SVG)
+
+
 class LoopbackBridge(ZMQWebSocketBridge):
     """meshcat's bridge with the web server bound to ``host`` and zmq bound to 127.0.0.1."""
 
-    def __init__(self, host: str, port: int) -> None:  # meshcat's __init__ binds everywhere
+    def __init__(self, host: str, port: int, *, title: str = "somarm") -> None:  # meshcat's binds everywhere
         self.host = host
+        self.title = title
+        self.text: dict = {}  # the overlay's merged state, sent to each browser that connects
         self.websocket_pool = set()
         self.app = self.make_app()
         self.ioloop = tornado.ioloop.IOLoop.current()
@@ -78,7 +114,9 @@ class LoopbackBridge(ZMQWebSocketBridge):
 
     def make_app(self):
         return tornado.web.Application([
+            (r"/static/(?:index\.html)?", _PageHandler, {"page": live_page(self.title)}),
             (r"/static/(.*)", StaticFileHandlerNoCache, {"path": VIEWER_ROOT, "default_filename": VIEWER_HTML}),
+            (r"/favicon\.ico", _IconHandler),
             (r"/", _QuietWebSocketHandler, {"bridge": self}),
         ])
 
@@ -90,6 +128,9 @@ class LoopbackBridge(ZMQWebSocketBridge):
             self.zmq_stream.send(str(len(self.websocket_pool)).encode())
         elif command == b"wait":
             self._reply_when_connected()
+        elif command == TEXT_COMMAND.encode() and len(frames) == 3:  # meshcat's own handler knows no text
+            self.apply_command(TEXT_COMMAND, "", frames[2])
+            self.zmq_stream.send(b"ok")
         else:
             super().handle_zmq(frames)
 
@@ -105,11 +146,14 @@ class LoopbackBridge(ZMQWebSocketBridge):
 
     def apply_command(self, kind: str, path: str, data: bytes) -> None:
         """Forward one packed command to every browser and remember it for later ones."""
-        if kind not in MESHCAT_COMMANDS:
+        if kind not in MESHCAT_COMMANDS and kind != TEXT_COMMAND:
             return
         for websocket in self.websocket_pool:
             websocket.write_message(data, binary=True)
-        self._remember(kind, [p for p in path.split("/") if p], data)
+        if kind == TEXT_COMMAND:
+            self.text = {**self.text, **umsgpack.unpackb(data)}
+        else:
+            self._remember(kind, [p for p in path.split("/") if p], data)
 
     def _remember(self, kind, path, data):
         """Keep the scene tree current, as meshcat's server does, for browsers that connect later."""
@@ -154,17 +198,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--port", type=whole_number, default=0)
     parser.add_argument("--ready-file", required=True)
     parser.add_argument("--parent-pid", type=whole_number, default=None)
-    parser.add_argument("--live-task", default=None, help="draw this task and take LiveView frames")
+    parser.add_argument("--title", default="somarm", help="the page's title (the task)")
+    parser.add_argument("--live-task", default=None, help="draw this task and take LiveView snapshots")
+    parser.add_argument("--live-model", default=None, help="draw this MuJoCo model (.mjb) and take snapshots")
     parser.add_argument("--task-params", default="{}", help="the task's parameters as JSON")
     args = parser.parse_args(argv)
-    bridge = LoopbackBridge(args.host, args.port)
+    bridge = LoopbackBridge(args.host, args.port, title=args.title)
     if args.parent_pid is not None:
         bridge.watch_parent(args.parent_pid)
     ready = {"zmq_url": bridge.zmq_url, "web_url": bridge.web_url, "port": bridge.fileserver_port}
-    if args.live_task is not None:
+    if args.live_task is not None or args.live_model is not None:
         from somarm.viewer.feed import attach_feed
 
-        ready["feed_url"] = attach_feed(bridge, args.live_task, json.loads(args.task_params))
+        ready["feed_url"] = attach_feed(bridge, task_name=args.live_task, model_path=args.live_model,
+                                        task_params=json.loads(args.task_params))
     tmp = args.ready_file + ".tmp"
     with open(tmp, "w", encoding="utf-8") as handle:
         json.dump(ready, handle)

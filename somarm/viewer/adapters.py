@@ -26,9 +26,9 @@ def goal_adapter(task) -> Callable[[np.ndarray], np.ndarray] | None:
 def throw_adapters(task):
     """``(trajectory_of(observation), target_of(observation))`` for a throwing task.
 
-    ``trajectory_of(observation)`` is a function ``(ux, uy) -> (n_points, 2)`` of (x, height):
-    the flight under that observation's conditions (target, wind, drag, mass), simulated by
-    the task's ``simulate_trajectory``. ``target_of(observation)`` is the target's x.
+    ``trajectory_of(observation)`` is a function ``(ux, uy) -> (times (T,), xz (T, 2))`` of time
+    and (x, height): the flight under that observation's conditions (target, wind, drag, mass),
+    simulated by the task's ``simulate_trajectory``, ending at the landing point. ``target_of(observation)`` is the target's x.
     """
     from somarm.tasks.throw import simulate_trajectory
 
@@ -38,6 +38,6 @@ def throw_adapters(task):
 
     def trajectory_of(observation: np.ndarray):
         params = dataclasses.replace(task.params, **conditions(observation))
-        return lambda ux, uy: np.asarray(simulate_trajectory(ux, uy, params)[1])
+        return lambda ux, uy: simulate_trajectory(ux, uy, params)
 
     return trajectory_of, lambda observation: conditions(observation)["X"]

@@ -8,6 +8,7 @@ Examples:
     somarm view reach2 --html reach2.html                  # offline page, no server
     somarm view reach2 --task-set dynamics=actuated --run DIR   # the servos move the arm, animated
     somarm view reach2_obstacle --run DIR                  # greedy episodes around the wall
+    somarm view gym:Reacher-v5 --run DIR --goals 5         # 5 greedy episodes of a Gymnasium MuJoCo task
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="somarm view", description=__doc__.split("\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog="\n".join(__doc__.split("\n")[2:]))
-    parser.add_argument("task", help="task name (reach2, four_goals, reach20, throw, throw_distance, ...)")
+    parser.add_argument("task", help="task name (reach2, four_goals, reach20, throw, throw_distance, ...), or gym:ID "
+                                     "of a Gymnasium MuJoCo environment")
     parser.add_argument("--run", default=None, help="run folder (config.json + learner.npz); default: untrained")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address the page listens on (default 127.0.0.1: this machine only)")
@@ -39,7 +41,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="write a self-contained HTML animation to FILE instead of serving")
     parser.add_argument("--seed", type=whole_number, default=0, help="seed of the goals shown (default 0)")
     parser.add_argument("--goals", type=whole_number, default=12,
-                        help=f"how many goals to cycle through (default 12, at most {MAX_GOALS})")
+                        help=f"how many goals to cycle through (default 12, at most {MAX_GOALS}); for gym:ID, "
+                             "episodes (at most 3,000 states in all)")
     parser.add_argument("--trial", type=whole_number, default=None,
                         help="which trial of the run to show, by its trial id (default: the run's first)")
     parser.add_argument("--interval", type=number, default=1.5, help="seconds per goal when live (default 1.5)")
@@ -72,6 +75,8 @@ def main(argv: list[str] | None = None) -> int:
         from somarm.run.config import parse_assignments
 
         task_set = tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set"))
+        if args.task.startswith("gym:"):  # a Gymnasium MuJoCo environment: its own model, greedy episodes
+            return _view_gym(args, task_set)
         session = sessions.load_session(args.task, run=args.run, n_goals=args.goals, seed=args.seed,
                                         trial=args.trial, task_set=task_set)
         if args.html is not None:
@@ -80,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
 
             recorder = Recorder()
             sessions.record(session, recorder)
-            path = write_html(args.html, recorder.commands(), title=f"somarm {args.task}")
+            path = write_html(args.html, recorder.commands(), title=args.task)
             print(f"wrote {path} (mean error {session.errors.mean():.4f} over {len(session.errors)} goals)")
             return 0
     except ValueError as exc:
@@ -89,12 +94,29 @@ def main(argv: list[str] | None = None) -> int:
     return _serve(session, args)
 
 
+def _view_gym(args, task_set) -> int:
+    """``somarm view gym:ID``: ``--goals`` episodes of the run's greedy policy (or random actions)."""
+    from somarm.viewer import gym_view
+
+    try:
+        written = gym_view.view(args.task, run=args.run, trial=args.trial, task_set=task_set, episodes=args.goals,
+                                seed=args.seed, html=args.html, host=args.host, port=args.port,
+                                log=lambda line: print(line, flush=True))
+    except (RuntimeError, OSError) as exc:
+        where = f"--host {args.host}" + ("" if args.port is None else f" --port {args.port}")
+        raise ValueError(f"the viewer could not start on {where}: {str(exc).split(' did not start: ')[-1]}") from None
+    except KeyboardInterrupt:
+        return 130
+    print(f"wrote {written}")
+    return 0
+
+
 def _serve(session, args) -> int:
     from somarm.viewer import sessions
     from somarm.viewer.client import MeshcatClient
     from somarm.viewer.server import MeshcatServer, stop_on_signals
 
-    server = MeshcatServer(host=args.host, port=args.port)
+    server = MeshcatServer(host=args.host, port=args.port, title=args.task)
     try:
         server.start()
     except (RuntimeError, OSError) as exc:

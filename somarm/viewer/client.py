@@ -13,6 +13,8 @@ from typing import Protocol
 import umsgpack
 import zmq
 
+from somarm.viewer.text import TEXT_COMMAND
+
 __all__ = ["CommandSink", "MeshcatClient", "Recorder", "ViewerUnavailableWarning"]
 
 
@@ -108,13 +110,17 @@ class MeshcatClient:
 
 
 class Recorder:
-    """Keeps the last state of every path, like meshcat's server tree, for the static HTML export."""
+    """Keeps the last state of every path, like meshcat's server tree, for the static HTML export.
+
+    The overlay's ``somarm_text`` commands are merged into one (each sets only its fields).
+    """
 
     def __init__(self) -> None:
         self.objects: dict[str, dict] = {}
         self.properties: dict[str, list[dict]] = {}
         self.transforms: dict[str, dict] = {}
         self.animation: dict | None = None
+        self.text: dict | None = None
 
     def send(self, command: dict) -> bool:
         """Record one lowered command; always True."""
@@ -128,6 +134,8 @@ class Recorder:
             self.transforms[path] = command
         elif kind == "set_animation":
             self.animation = command
+        elif kind == TEXT_COMMAND:
+            self.text = {**(self.text or {}), **command}
         elif kind == "delete":
             for store in (self.objects, self.properties, self.transforms):
                 for key in [k for k in store if k == path or k.startswith(path + "/")]:
@@ -143,10 +151,12 @@ class Recorder:
         return True
 
     def commands(self) -> list[dict]:
-        """All recorded commands in replay order: objects, properties, transforms, animation."""
+        """All recorded commands in replay order: objects, properties, transforms, text, animation."""
         ordered = list(self.objects.values())
         ordered += [p for props in self.properties.values() for p in props]
         ordered += list(self.transforms.values())
+        if self.text is not None:
+            ordered.append(self.text)
         if self.animation is not None:
             ordered.append(self.animation)
         return ordered

@@ -37,8 +37,10 @@ class MeshcatServer:
         mean to share the viewer; the zmq command socket is always on 127.0.0.1.
       port: web port; None lets the system pick a free one.
       start_timeout_s: how long to wait for the server to come up.
-      live_task: if given, the server draws this task itself from frames pushed to ``feed_url``
+      title: the page's title (the task's name).
+      live_task: if given, the server draws this task itself from snapshots pushed to ``feed_url``
         (what ``LiveView`` uses); ``task_params`` are the task's parameters.
+      live_model: instead of a task, any compiled MuJoCo model, drawn from snapshots of its states.
 
     Attributes (after ``start``):
       web_url: the page to open, e.g. ``http://127.0.0.1:7001/static/``.
@@ -48,7 +50,8 @@ class MeshcatServer:
     """
 
     def __init__(self, *, host: str = "127.0.0.1", port: int | None = None, start_timeout_s: float = 30.0,
-                 live_task: str | None = None, task_params: dict | None = None):
+                 title: str = "somarm", live_task: str | None = None, task_params: dict | None = None,
+                 live_model=None):
         if not isinstance(host, str) or not host:
             raise ValueError(f"host must be a non-empty address string, got {host!r}")
         self.host = host
@@ -56,7 +59,11 @@ class MeshcatServer:
         if self.requested_port > 65535:
             raise ValueError(f"port must be in 0..65535, got {port!r}")
         self.start_timeout_s = check_number("start_timeout_s", start_timeout_s, minimum=0, strict_minimum=True)
+        if not isinstance(title, str):
+            raise ValueError(f"title must be a string, got {title!r}")
+        self.title = title
         self.live_task = live_task
+        self.live_model = live_model
         self.task_params = dict(task_params or {})
         self.feed_url: str | None = None
         self.web_url: str | None = None
@@ -87,10 +94,16 @@ class MeshcatServer:
         command = [
             sys.executable, "-m", "somarm.viewer._bridge", "--host", self.host,
             "--port", str(self.requested_port), "--ready-file", str(ready_file),
-            "--parent-pid", str(os.getpid()),
+            "--parent-pid", str(os.getpid()), "--title", self.title,
         ]
         if self.live_task is not None:
             command += ["--live-task", self.live_task, "--task-params", json.dumps(self.task_params)]
+        elif self.live_model is not None:
+            import mujoco
+
+            model_file = Path(self._folder.name) / "model.mjb"
+            mujoco.mj_saveModel(self.live_model, str(model_file), None)
+            command += ["--live-model", str(model_file)]
         # Own session: a Ctrl-C in the terminal reaches us, and we stop the server in order.
         self.process = subprocess.Popen(
             command, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, start_new_session=True

@@ -15,10 +15,10 @@ import numpy as np
 from somarm.streams import trial_generators
 from somarm.viewer import shows
 from somarm.viewer.client import CommandSink
-from somarm.viewer.motion import MotionShow
+from somarm.viewer.motion import MotionShow, episode_describer, settle_describer
 from somarm.viewer.shows import arm_animation
 
-__all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play"]
+__all__ = ["Session", "load_session", "greedy_answers", "arm_animation", "record", "play", "sweep_order"]
 
 
 @dataclass
@@ -35,6 +35,9 @@ class Session:
       paths: per goal, the joint angles ``(n_frames, nq)`` MuJoCo moved the arm through (actuated
         reach: from the start pose until the reward is read; reach2_obstacle: a whole greedy
         episode), or None where the arm is set, not driven.
+      what: what the page shows, in a few words (its title says ``task: what``).
+      learner: the learner's kind; trial: the shown trial's id; step: steps it has learned;
+      run: the run folder it came from (None: an untrained learner of seed ``seed``).
     """
 
     task_name: str
@@ -44,6 +47,22 @@ class Session:
     fan: np.ndarray | None
     show: object
     paths: list[np.ndarray] | None = None
+    what: str = "greedy answers"
+    learner: str = ""
+    trial: int = 0
+    step: int = 0
+    run: str | None = None
+    seed: int = 0
+
+    def title(self) -> str:
+        """The overlay's first line: the task and what is shown."""
+        return f"{self.task_name}: {self.what}"
+
+    def lines(self) -> list[str]:
+        """The overlay's lines about the learner: kind, trial, steps learned, and where it came from."""
+        if self.run is None:
+            return [f"untrained {self.learner} learner (no --run), seed {self.seed}"]
+        return [f"{self.learner} learner, trial {self.trial}, after {self.step:,} training steps", f"run {self.run}"]
 
 
 def greedy_answers(task, learner, observations: np.ndarray, *, trial: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -54,7 +73,7 @@ def greedy_answers(task, learner, observations: np.ndarray, *, trial: int = 0) -
     return actions, errors
 
 
-def _sweep_order(observations: np.ndarray) -> np.ndarray:
+def sweep_order(observations: np.ndarray) -> np.ndarray:
     """Goals sorted by angle about their mean, so a cycle (or Fig. 11's sweep) moves smoothly."""
     if observations.shape[1] < 2:
         return np.argsort(observations[:, 0])
@@ -97,6 +116,8 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
             raise ValueError(f"--trial picks a trial of a trained run: give --run DIR with it (got --trial {trial})")
         allowed = f"0..{ids[-1]}" if ids == list(range(len(ids))) else ", ".join(map(str, ids))
         raise ValueError(f"--trial must be one of this run's trials ({allowed}), got {trial}")
+    about = {"learner": learner.kind, "trial": ids[0] if trial is None else trial, "step": int(learner.t),
+             "run": None if run is None else str(run), "seed": seed}
     trial = ids.index(ids[0] if trial is None else trial)  # from here on: the index in the batch
     task_params = {**task_params, **(task_set or {})}
     task = tasks.make(task_name, n_trials=1, seed=seed, **task_params)
@@ -104,8 +125,8 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     rng = trial_generators(seed, np.array([0]), "viewer")[0]
     observations = np.asarray(task.sample_observations(rng, n_goals), dtype=np.float64)
     if task.episodic:
-        return _episode_session(task_name, task, learner, observations, trial)
-    observations = observations[_sweep_order(observations)]
+        return _episode_session(task_name, task, learner, observations, trial, about)
+    observations = observations[sweep_order(observations)]
     actions, errors = greedy_answers(task, learner, observations, trial=trial)
     view = tasks.record(task_name).view
     fan = None
@@ -114,13 +135,19 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     if task.actuated:  # from the start pose (all zeros) to where the reward is read
         moving = task.reached_angles(actions, path=True)
         paths = [np.vstack([np.zeros((1, task.n_links)), path]) for path in moving]
-        return Session(task_name, observations, actions, errors, None,
-                       MotionShow(shows.show_for_task(task_name, task)), paths)
+        arm = shows.show_for_task(task_name, task)
+        describe = settle_describer(task, observations, errors, float(arm.model.opt.timestep))
+        return Session(task_name, observations, actions, errors, None, MotionShow(arm, describe), paths,
+                       what="the servos drive the arm to each greedy pose", **about)
     show = shows.show_for_task(task_name, task, sweep=len(observations) if view == "sweep" else None)
-    return Session(task_name, observations, actions, errors, fan, show)
+    what = {"sweep": "greedy postures for a sweep of goals (as Fig. 11)",
+            "fan": "every action unit thrown at once (the fan)"}.get(view, "greedy answer for each goal")
+    if tasks.record(task_name).model == "launcher" and fan is None:
+        what = "greedy throw for each target"
+    return Session(task_name, observations, actions, errors, fan, show, what=what, **about)
 
 
-def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: int) -> Session:
+def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: int, about: dict) -> Session:
     """Greedy episodes of a multi-step task from ``starts`` ``(n, obs_dim)``, with their MuJoCo paths."""
 
     def policy(angles: np.ndarray) -> np.ndarray:
@@ -132,7 +159,8 @@ def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: i
     paths = [episodes["path"][k, :ends[k]] for k in range(len(starts))]
     finals = np.array([path[-1] for path in paths])
     return Session(task_name, starts, finals, task.distances(finals), None,
-                   MotionShow(shows.show_for_task(task_name, task)), paths)
+                   MotionShow(shows.show_for_task(task_name, task), episode_describer(task)), paths,
+                   what="greedy episodes from different starts", **about)
 
 
 def record(session: Session, sink: CommandSink) -> None:

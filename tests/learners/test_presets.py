@@ -9,10 +9,11 @@ from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table5+"]
+BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
-    assert list(presets.PRESETS) == [*NAMES, "obstacle"]
+    assert list(presets.PRESETS) == [*NAMES, "obstacle", *BENCHMARKS]
     for name in NAMES:
         assert isinstance(presets.get(name), SOMQConfig)
         line = presets.describe(name)
@@ -36,6 +37,30 @@ def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
     assert preset.config.input_shape == (12, 12) and preset.config.action_shape == (3, 3)
     assert presets.describe("obstacle").startswith("beyond the paper")
     assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
+
+
+def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
+    for name in BENCHMARKS[1:]:
+        preset = presets.PRESETS[name]
+        c = preset.config
+        assert preset.task.startswith("gym:") and presets.describe(name).startswith("beyond the paper")
+        assert any("seeds 100-199" in choice for choice in preset.choices)
+        # no random units and no perturbations: optimistic initial values alone explore
+        assert c.p.value(0) == 0 and c.epsilon.value(0) == 0
+        assert c.action_init == "grid" and c.lambda_a.value(0) == 0 and c.n_a.value(0) == 0
+        assert c.response == "interpolated"
+    # optimism: above every discounted return (Pendulum's rewards are <= 0; a MountainCar episode
+    # earns at most 100, an InvertedPendulum step 1, so at most 1 / (1 - 0.99) = 100)
+    assert presets.get("pendulum").q_init == 0.0 and presets.get("pendulum").action_shape == (3,)
+    assert presets.get("mountaincar").q_init >= 100 and presets.get("invertedpendulum").q_init >= 100
+    # MountainCar: +-0.5 must be on the grid (bang-bang at +-1 costs too much to earn 90)
+    assert presets.get("mountaincar").action_shape == (5,)
+    # MountainCar's input map stays at its uniform start: one settling on the valley leaves the hills coarse
+    assert presets.get("mountaincar").lambda_s.value(0) == 0 and presets.get("mountaincar").n_s.value(0) == 0
+    assert presets.get("reacher").action_shape == (3, 3)
+    # the generic preset cannot know a reward range, so it explores with random units and perturbations
+    generic = presets.get("gym")
+    assert generic.q_init == 0.0 and generic.p.value(10**6) > 0 and generic.epsilon.value(10**6) > 0
 
 
 def test_table1_values():

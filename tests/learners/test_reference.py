@@ -12,9 +12,9 @@ from somarm.learners.reference import ReferenceSOMQ
 from somarm.learners.somq import SOMQ
 
 
-def _run_both(config, *, n_trials=3, n_steps=150, seed=11):
-    batched = SOMQ(config, n_trials=n_trials, seed=seed, **BOUNDS)
-    references = [ReferenceSOMQ(config, seed=seed, trial_id=i, **BOUNDS) for i in range(n_trials)]
+def _run_both(config, *, n_trials=3, n_steps=150, seed=11, bounds=BOUNDS):
+    batched = SOMQ(config, n_trials=n_trials, seed=seed, **bounds)
+    references = [ReferenceSOMQ(config, seed=seed, trial_id=i, **bounds) for i in range(n_trials)]
     rng = np.random.default_rng(123)
     observations = rng.uniform([0, -1], [1, 1], (n_trials, 2))
     for step in range(n_steps):
@@ -99,3 +99,21 @@ def test_periodic_actions_equal_reference_exactly(noise):
         np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
         np.testing.assert_array_equal(batched.q[i], ref.q)
     assert wrapped > 20  # many actions came out across an edge
+
+
+@pytest.mark.parametrize("response", ["winner", "interpolated"])
+def test_optimistic_start_and_grid_actions_equal_reference_exactly(response):
+    # Two action dimensions on a 3 x 3 action map spread over the box, every Q starting above any return.
+    bounds = dict(BOUNDS, action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
+    config = dataclasses.replace(_config((3, 2), True, 0.9), action_shape=(3, 3), action_init="grid", q_init=2.0,
+                                 response=response)
+    fresh = SOMQ(config, n_trials=3, seed=11, **bounds)
+    np.testing.assert_array_equal(fresh.action_weights[2], [[-1, 0], [-1, 0.5], [-1, 1], [0, 0], [0, 0.5], [0, 1],
+                                                            [1, 0], [1, 0.5], [1, 1]])
+    assert (fresh.q == 2.0).all()
+    batched, references = _run_both(config, bounds=bounds, n_steps=100)
+    for i, ref in enumerate(references):
+        np.testing.assert_array_equal(batched.input_weights[i], ref.input_weights)
+        np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
+        np.testing.assert_array_equal(batched.q[i], ref.q)
+    assert batched.q.min() < 1.0  # the optimistic values were learned down

@@ -263,6 +263,10 @@ def test_bad_overrides_one_clear_line(overrides, match):
         (lambda: SOMQ(SOMQConfig(), n_trials=0, **BOX2), "n_trials"),
         (lambda: SOMQ(SOMQConfig(), seed=-1, **BOX2), "seed"),
         (lambda: SOMQ({"alpha": 1}, **BOX2), "config must be a SOMQConfig"),
+        (lambda: SOMQConfig(q_init=float("nan")), "q_init must be finite"),
+        (lambda: SOMQConfig(action_init="even"), "action_init must be one of random, grid, got 'even'"),
+        (lambda: SOMQ(SOMQConfig(action_shape=(9,), action_init="grid"), **BOX2),
+         "action_init=grid needs an action map with one grid dimension per action dimension: action_shape=9 has 1"),
     ],
 )
 def test_bad_construction(make, match):
@@ -334,3 +338,26 @@ def test_relative_epsilon_scales_with_each_action_range():
     assert steps[1][:, 0].max() <= 0.01 and steps[1][:, 1].max() <= 2.0 and steps[1][:, 1].max() > 1.8
     np.testing.assert_allclose(steps[1][:, 1], 200 * steps[0][:, 1], rtol=1e-12)  # same draws, scaled
     assert SOMQConfig().with_overrides({"epsilon_relative": "true"}).epsilon_relative
+
+
+def test_optimistic_q_init_makes_the_greedy_policy_try_every_action_unit():
+    # One state, five action units spread over [0, 1] (the ends on the bounds), no random exploration, rewards
+    # in (0, 1]: with Q starting at 0 (the paper's) the first unit tried stays greedy; starting above every
+    # return, each unit is tried once before any is tried twice, and the best one is then kept.
+    box = dict(observation_low=[0.0], observation_high=[1.0], action_low=[0.0], action_high=[1.0])
+    tried = {}
+    for q_init in (0.0, 2.0):
+        config = SOMQConfig(input_shape=(1,), action_shape=(5,), alpha=1.0, lambda_a=0.0, n_a=0.0, p=0.0,
+                            epsilon=0.0, action_init="grid", q_init=q_init)
+        learner = SOMQ(config, seed=3, **box)
+        np.testing.assert_array_equal(learner.action_weights[0, :, 0], [0.0, 0.25, 0.5, 0.75, 1.0])
+        assert (learner.q == q_init).all()
+        actions = []
+        for _ in range(12):
+            action = learner.act([[0.5]])
+            actions.append(float(action[0, 0]))
+            learner.learn(1.0 - np.abs(action[:, 0] - 0.75))
+        tried[q_init] = actions
+    assert len(set(tried[0.0])) == 1  # never leaves its first unit
+    assert sorted(tried[2.0][:5]) == [0.0, 0.25, 0.5, 0.75, 1.0]
+    assert tried[2.0][5:] == [0.75] * 7

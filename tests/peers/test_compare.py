@@ -51,10 +51,10 @@ def test_the_same_seed_gives_the_same_errors_for_somarm_learners(tmp_path):
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, motoric, tabular, td3, sac"),
+    (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, somq+, motoric, tabular, td3, sac"),
     (["reach20", "--learners", "tabular"], "tabular cannot learn reach20"),
     (["reach3"], "unknown task 'reach3'"),
-    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes the one-step tasks"),
+    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes gym:ID and the one-step tasks"),
     (["reach2", "--seeds", "0"], "seeds must be a whole number >= 1"),
 ])
 def test_bad_compare_arguments_end_in_one_line(argv, message, capsys, tmp_path):
@@ -79,7 +79,60 @@ def test_the_peers_part_is_optional_and_runs_when_named(tmp_path):
     claims = runner.load_claims(tmp_path)["experiments"]["peers"]["claims"]
     assert len(claims) == 2 and all(c["holds"] in (True, False) for c in claims)
     report = (tmp_path / "REPORT.md").read_text()
-    assert "| samples | SOM-Q | Motoric Map | tabular (fixed grid) | SB3 TD3 | SB3 SAC |" in report
+    assert ("| samples | SOM-Q | SOM-Q+ (interpolated) | Motoric Map | tabular (fixed grid) | SB3 TD3 | SB3 SAC |"
+            in report)
+    assert "| learner | error <= 0.05 | error <= 0.02 | error <= 0.01 |" in report
+    assert report.count("\n| SB3 TD3 | ") == 3  # a time-to-error row per task
     for task in ("reach2", "reach20", "throw_distance"):
         assert (tmp_path / "peers" / task / "compare.png").stat().st_size > 10_000
         assert f"![compare](peers/{task}/compare.png)" in report
+
+
+def test_compare_scores_a_gymnasium_environment_by_greedy_returns_with_the_zoos_settings(tmp_path):
+    config = compare.CompareConfig(task="gym:Pendulum-v1", learners=("somq", "td3"), samples=300, peer_samples=300,
+                                   seeds=1, episodes=5)
+    result = compare.compare(config, tmp_path, progress=False)
+    assert result["metric"] == "return" and result["episodes"] == 5
+    assert -2000 < result["random_action_return"] < -500  # Pendulum's random torques
+    for kind in ("somq", "td3"):
+        returns = np.array(result["learners"][kind]["return"])
+        assert returns.shape == (len(compare.ladder(300)), 1) and np.all((returns < 0) & (returns > -2000))
+    td3 = result["learners"]["td3"]["settings"]
+    assert td3["source"].startswith("rl-zoo3 ") and "400, 300" in td3["net_arch"] and td3["gamma"] == "0.98"
+    assert "NormalActionNoise" in td3["action_noise"]
+    assert (tmp_path / "compare.png").stat().st_size > 10_000
+
+
+def test_the_zoos_entries_become_sb3_keywords_and_other_environments_take_sb3s_defaults():
+    from somarm.peers import zoo
+
+    keywords, budget, source = zoo.settings("sac", "MountainCarContinuous-v0", 1)
+    assert budget == 50_000 and source.startswith("rl-zoo3")
+    assert keywords["use_sde"] is True and keywords["policy_kwargs"]["net_arch"] == [64, 64]
+    assert keywords["policy_kwargs"]["log_std_init"] == -3.67 and "n_timesteps" not in keywords
+    keywords, budget, source = zoo.settings("td3", "MountainCarContinuous-v0", 1)
+    assert budget == 300_000 and type(keywords["action_noise"]).__name__ == "OrnsteinUhlenbeckActionNoise"
+    keywords, budget, source = zoo.settings("td3", "InvertedPendulum-v5", 1)
+    assert budget is None and source == "SB3 defaults with Gaussian action noise 0.1"
+    assert float(keywords["action_noise"]._sigma[0]) == 0.1
+    assert zoo.settings("sac", "Reacher-v5", 2)[:2] == ({}, None)
+    assert compare.peer_budget("td3", compare.CompareConfig(task="gym:Pendulum-v1")) == 20_000
+    assert compare.peer_budget("sac", compare.CompareConfig(task="gym:Reacher-v5", samples=777)) == 777
+
+
+def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoos_numbers(tmp_path, monkeypatch):
+    from somarm.reproduce import benchmarks
+
+    monkeypatch.setattr(benchmarks, "ENVIRONMENTS", {"Pendulum-v1": 20_000})
+    assert "benchmarks" not in runner.EXPERIMENTS and runner.check_names(["benchmarks"]) == ["benchmarks"]
+    assert runner.reproduce(tmp_path, quick=True, only=["benchmarks"], progress=False) == 0
+    claims = runner.load_claims(tmp_path)["experiments"]["benchmarks"]["claims"]
+    assert len(claims) == 2 and claims[0]["holds"] is False  # 400 samples do not swing a pendulum up
+    report = (tmp_path / "REPORT.md").read_text()
+    assert "| environment | learner | final return (mean ± sd) | to the peers' converged return |" in report
+    for kind in ("SOM-Q", "SOM-Q+ (interpolated)", "Motoric Map", "tabular (fixed grid)", "SB3 TD3", "SB3 SAC"):
+        assert f"| Pendulum-v1 | {kind} | " in report
+    assert "TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in report
+    merged = json.loads((tmp_path / "benchmarks" / "Pendulum-v1" / "compare.json").read_text())
+    assert set(merged["learners"]) == set(benchmarks.LEARNERS) and merged["metric"] == "return"
+    assert (tmp_path / "benchmarks" / "Pendulum-v1" / "compare.png").stat().st_size > 10_000

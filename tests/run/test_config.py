@@ -63,7 +63,7 @@ def test_a_whole_learner_config_is_used_as_given_and_overrides_change_it():
     ({"learner_config": MotoricConfig()}, "^learner_config of a somq learner must be a SOMQConfig, got MotoricConfig$"),
     ({"learner": "bogus"}, "^unknown learner 'bogus'; allowed: somq, motoric, tabular$"),
     ({"preset": "table9", "learner_config": SOMQConfig()}, "^unknown preset 'table9'"),
-    ({"backend": "bullet"}, "^unknown backend 'bullet'; backends: mujoco, analytic$"),
+    ({"backend": "bullet"}, "^unknown backend 'bullet'; backends: mujoco, analytic, gymnasium$"),
     ({"task": "reach2_obstacle", "backend": "analytic"}, "^reach2_obstacle needs the mujoco backend"),
 ])
 def test_bad_typed_settings_fail_in_one_line_before_anything_is_built(kwargs, match, monkeypatch):

@@ -23,7 +23,7 @@ class _PlantedEpisodes:
 
     name, episodic = "planted", True
 
-    def sample_observations(self, rng, n):
+    def sample_starts(self, rng, n):
         return np.zeros((n, 2))
 
     def run_episodes(self, policy, starts):

@@ -11,15 +11,11 @@ from somarm.viewer import sessions
 from somarm.viewer.client import Recorder
 
 
-def _geom_pose(model: mujoco.MjModel, qpos: np.ndarray, geom: str) -> np.ndarray:
+def _body_position(model: mujoco.MjModel, qpos: np.ndarray, body: str) -> np.ndarray:
     data = mujoco.MjData(model)
     data.qpos[:] = qpos
     mujoco.mj_forward(model, data)
-    gid = model.geom(geom).id
-    pose = np.eye(4)
-    pose[:3, :3] = data.geom_xmat[gid].reshape(3, 3)
-    pose[:3, 3] = data.geom_xpos[gid]
-    return pose
+    return data.xpos[model.body(body).id].copy()
 
 
 def _track(animation: dict, suffix: str, kind: str) -> list[dict]:
@@ -35,12 +31,13 @@ def test_every_animation_frame_holds_the_arm_at_mujocos_pose_along_the_path(task
     sessions.record(session, recorder)
     animation = recorder.commands()[-1]
     assert animation["type"] == "set_animation" and animation["options"]["play"]
-    positions = _track(animation, "/link2", "position")
+    positions = _track(animation, f"/{task_name}/link2", "position")
     model = session.show.model
     frames = [np.asarray(path[::2]) for path in session.paths]
     # Frame k of the first path is the arm at timestep 2k of MuJoCo's trajectory.
     for k in (0, 5, len(frames[0]) - 1):
-        expected = _geom_pose(model, frames[0][k], "link2")[:3, 3]
+        expected = _body_position(model, frames[0][k], "link2")
+        assert positions[k]["time"] == k
         np.testing.assert_allclose(positions[k]["value"], expected, atol=1e-9)
     # The paths move: the arm is driven, not set.
     assert np.abs(session.paths[0][-1] - session.paths[0][0]).max() > 0.1
@@ -67,6 +64,27 @@ def test_obstacle_episodes_end_at_the_goal_or_the_step_limit_and_draw_wall_and_g
     drawn = {c["path"] for c in recorder.commands() if c["type"] == "set_object"}
     assert any(p.endswith("/wall/shape") or "/wall" in p for p in drawn)
     assert any("/goal" in p for p in drawn)
+
+
+def test_an_episode_traces_the_fingertip_and_says_step_return_and_success():
+    from somarm.viewer.motion import TRACE_COLOR
+
+    session = sessions.load_session("reach2_obstacle", n_goals=2, seed=0)
+    recorder = Recorder()
+    sessions.record(session, recorder)
+    commands = recorder.commands()
+    pieces = [c for c in commands if c["type"] == "set_object" and "/trace/path00/" in c["path"]]
+    assert 5 <= len(pieces) <= 40 and all(c["object"]["materials"][0]["color"] == TRACE_COLOR for c in pieces)
+    animation = commands[-1]
+    last_piece = pieces[-1]["path"]
+    scale = _track(animation, last_piece, "scale")
+    assert scale[0]["value"][0] < 1e-6  # the end of the path is not drawn before the tip gets there
+    assert any(key["value"][0] == 1.0 for key in scale)
+    text = recorder.text
+    steps = [lines[0] for _, lines in text["timeline"]["frames"] if lines[0].startswith("episode 1 of 2")]
+    assert steps[0].startswith("episode 1 of 2: step 0 of") and len(set(steps)) > 2  # the step counts up
+    final = text["timeline"]["frames"][len(steps) - 1][1][1]
+    assert final.startswith("return so far") and ("goal reached" in final or "step limit" in final)
 
 
 def test_the_arm_moves_between_goals_the_shorter_way_round():

@@ -71,34 +71,78 @@ def model_files() -> list[Path]:
     return [MODELS / f"{name}.xml" for name in ("arm2", "arm20", "launcher") if (MODELS / f"{name}.xml").exists()]
 
 
+def drawn_geom_poses(scene: MujocoScene, commands: list[dict]) -> dict[str, np.ndarray]:
+    """What the page composes for each geom: its body's transform times the geom's own (from the commands)."""
+    sent = {c["path"]: np.array(c["matrix"]).reshape(4, 4).T for c in commands if c["type"] == "set_transform"}
+    out = {}
+    for name in scene.names:
+        node = scene.node(name).lower()
+        out[name] = sent[node.rsplit("/", 1)[0]] @ sent[node]
+    return out
+
+
 @pytest.mark.parametrize("source", ["shapes", *[p.name for p in model_files()]])
 def test_each_geom_pose_equals_mujoco(source):
     model = shapes_model() if source == "shapes" else mujoco.MjModel.from_xml_path(str(MODELS / source))
     scene = MujocoScene(model, prefix="/meshcat/test")
+    setup = scene.setup_commands()
     rng = np.random.default_rng(3)
     for _ in range(5):
         qpos = random_qpos(model, rng)
         mocap = rng.uniform(-1, 1, (model.nmocap, 3))
-        expected = mujoco_poses(model, qpos)
         data = mujoco.MjData(model)
         data.qpos[:] = qpos
         data.mocap_pos[:] = mocap
         mujoco.mj_forward(model, data)
-        expected[:, :3, 3] = data.geom_xpos  # with the mocap bodies moved
-        got = scene.transforms(qpos, mocap_pos=mocap)
-        np.testing.assert_allclose(got, expected[scene.geom_ids], atol=1e-9, rtol=0)
-        # What goes over the wire (column-major, as three.js reads it) is the same pose.
-        for command in scene.pose_commands(qpos, mocap_pos=mocap, everything=True):
-            k = scene.names.index(command["path"].rsplit("/", 1)[1])
-            sent = np.array(command["matrix"]).reshape(4, 4).T
-            np.testing.assert_allclose(sent, expected[scene.geom_ids[k]], atol=1e-9, rtol=0)
+        expected = np.tile(np.eye(4), (model.ngeom, 1, 1))
+        expected[:, :3, :3] = data.geom_xmat.reshape(-1, 3, 3)
+        expected[:, :3, 3] = data.geom_xpos
+        np.testing.assert_allclose(scene.geom_poses(qpos, mocap_pos=mocap), expected[scene.geom_ids], atol=1e-9)
+        # What goes over the wire (column-major, as three.js reads it): body poses, geoms fixed in them.
+        drawn = drawn_geom_poses(scene, setup + scene.pose_commands(qpos, mocap_pos=mocap, everything=True))
+        for k, name in enumerate(scene.names):
+            np.testing.assert_allclose(drawn[name], expected[scene.geom_ids[k]], atol=1e-9, err_msg=name)
+
+
+def test_a_state_may_be_an_mjdata_straight_after_a_step():
+    model = shapes_model()
+    scene = MujocoScene(model, prefix="/m")
+    data = mujoco.MjData(model)
+    data.qvel[:] = 3.0
+    for _ in range(4):
+        mujoco.mj_step(model, data)  # data.xpos now lags qpos by a step; the scene recomputes them
+    np.testing.assert_allclose(scene.transforms(data), scene.transforms(data.qpos.copy()), atol=0)
+    reference = mujoco.MjData(model)
+    reference.qpos[:] = data.qpos
+    mujoco.mj_kinematics(model, reference)
+    np.testing.assert_allclose(scene.transforms(data)[:, :3, 3], reference.xpos[scene.body_ids], atol=1e-12)
+    assert np.abs(scene.transforms(data)[:, :3, 3] - data.xpos[scene.body_ids]).max() > 1e-3
+
+
+def test_a_gymnasium_mujoco_environment_is_drawn_from_its_model():
+    gymnasium = pytest.importorskip("gymnasium", reason="gymnasium (the peers extra) is not installed")
+    env = gymnasium.make("Reacher-v5")
+    base = env.unwrapped
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(env.action_space.sample())
+    scene = MujocoScene(base.model, prefix="/meshcat/reacher")
+    assert {"ground", "link0", "link1", "fingertip", "target"} <= set(scene.names)
+    assert {"body0", "body1", "fingertip", "target"} <= set(scene.body_names)
+    drawn = drawn_geom_poses(scene, scene.setup_commands() + scene.pose_commands(base.data, everything=True))
+    mujoco.mj_kinematics(base.model, base.data)
+    for k, name in enumerate(scene.names):
+        geom = scene.geom_ids[k]
+        np.testing.assert_allclose(drawn[name][:3, 3], base.data.geom_xpos[geom], atol=1e-9, err_msg=name)
+        np.testing.assert_allclose(drawn[name][:3, :3], base.data.geom_xmat[geom].reshape(3, 3), atol=1e-9)
+    env.close()
 
 
 def test_real_arm_fingertip_and_reach_poses_match_kinematics():
     model = mujoco.MjModel.from_xml_path(str(MODELS / "arm2.xml"))
     scene = MujocoScene(model, prefix="/meshcat/arm2")
     theta = np.array([0.7, -1.1])
-    poses = dict(zip(scene.names, scene.transforms(theta), strict=True))
+    poses = dict(zip(scene.names, scene.geom_poses(theta), strict=True))
     # link2's capsule centre lies halfway along link 2, whatever the link lengths are.
     elbow = poses["link1"][:3, 3] * 2 - np.array([0.5, 0.0, 0.0])
     direction = np.array([np.cos(theta.sum()), np.sin(theta.sum()), 0.0])
@@ -159,23 +203,27 @@ def test_half_sizes_become_full_sizes():
     assert endless.geometry.lower(None)["width"] > 0  # an infinite plane is drawn finite
 
 
-def test_setup_draws_every_part_and_frames_move_only_moving_geoms():
+def test_setup_draws_every_part_and_frames_move_only_moving_bodies():
     model = shapes_model()
     scene = MujocoScene(model, prefix="/meshcat/shapes")
     setup = scene.setup_commands()
     objects = [c["path"] for c in setup if c["type"] == "set_object"]
     assert len(objects) == sum(len(scene.parts[int(g)]) for g in scene.geom_ids) == 12
-    assert "/meshcat/shapes/upper/cap1" in objects
+    assert "/meshcat/shapes/upper/upper/cap1" in objects and "/meshcat/shapes/world/floor/shape" in objects
     moved = {c["path"].rsplit("/", 1)[1] for c in scene.pose_commands(random_qpos(model, np.random.default_rng(0)))}
-    assert moved == {"upper", "lower", "hand", "ball", "can", "egg"}
+    assert moved == {"upper", "lower", "free"}
+    hidden = MujocoScene(model, prefix="/m", hidden=("floor", "egg"))
+    assert "floor" not in hidden.names and "egg" not in hidden.names and "ball" in hidden.names
     with pytest.raises(ValueError, match="qpos must have shape"):
         scene.transforms(np.zeros(3))
+    with pytest.raises(ValueError, match="mocap_pos must have shape"):
+        scene.set_state(None, mocap_pos=np.zeros((2, 3)))
 
 
 def test_colours_come_from_the_model():
     model = shapes_model()
     scene = MujocoScene(model, prefix="/m")
-    floor = next(c for c in scene.setup_commands() if c["path"] == "/m/floor/shape" and c["type"] == "set_object")
+    floor = next(c for c in scene.setup_commands() if c["path"] == "/m/world/floor/shape" and c["type"] == "set_object")
     assert floor["object"]["materials"][0]["color"] == (204 << 16) | (204 << 8) | 204
 
 
@@ -213,7 +261,10 @@ def test_static_html_holds_the_viewer_and_every_command(tmp_path):
 
     encoded = json.loads(re.search(r"var commands = (\[.*?\]);", text).group(1))
     assert [umsgpack.unpackb(base64.b64decode(e)) for e in encoded] == recorder.commands()
-    assert static_html([]).count("<script") == 2
+    page = static_html([])
+    assert page.count("<script") == 3  # meshcat's viewer, the overlay, the replay
+    assert "SomarmOverlay.install(viewer)" in page and 'id="meshcat-pane"' in page
+    assert "<title>a &lt;b&gt;</title>" in static_html([], title="a <b>")
     with pytest.raises(ValueError, match="does not exist"):
         write_html(tmp_path / "missing" / "x.html", [])
 
@@ -226,26 +277,3 @@ def test_importing_somarm_does_not_import_meshcat():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
     assert importlib.util.find_spec("somarm.viewer.scene") is not None
-
-
-def test_arm_show_error_is_the_tasks_reward_and_the_tip_is_mujocos_site():
-    from somarm.viewer.feed import own_task
-    from somarm.viewer.shows import show_for_task
-
-    rng = np.random.default_rng(5)
-    for name in ("reach2", "four_goals", "reach20"):
-        task = own_task(name, None)
-        show = show_for_task(name, task)
-        observations = task.sample_observations(rng, 4)
-        actions = rng.uniform(task.action_low, task.action_high, (4, task.action_low.size))
-        rewards = task.evaluate(observations, actions)
-        for observation, action, reward in zip(observations, actions, rewards, strict=True):
-            commands = show.frame(observation, action, reward)
-            assert np.isclose(show.last_error, -reward, atol=1e-9), name
-            tip = next(c for c in commands if c["path"].endswith("/fingertip"))
-            data = mujoco.MjData(show.model)
-            data.qpos[:] = action
-            mujoco.mj_forward(show.model, data)
-            site = mujoco.mj_name2id(show.model, mujoco.mjtObj.mjOBJ_SITE, "fingertip")
-            np.testing.assert_allclose(np.array(tip["matrix"]).reshape(4, 4).T[:3, 3], data.site_xpos[site],
-                                       atol=1e-9)

@@ -237,34 +237,87 @@ async def _scene_messages(port: int, n_wait_s: float = 1.0) -> list[dict]:
     return messages
 
 
-def test_live_view_frames_reach_the_scene_at_mujocos_pose():
+def _fixed_policy(angles):
+    return lambda observations: np.tile(angles, (len(observations), 1))
+
+
+def test_live_view_snapshots_reach_the_scene_at_mujocos_pose():
     from somarm.viewer.live import LiveView
     from somarm.viewer.shows import load_model
 
-    action = np.array([[0.4, 1.9], [0.0, 0.0]])
-    with LiveView("reach2", max_rate_hz=1000.0, trial=0) as view:
-        view.update(5, np.array([[0.55, 0.6], [0.1, 0.1]]), action, np.array([-0.1, -0.2]))
+    action = np.array([0.4, 1.9])
+    with LiveView("reach2", policy=_fixed_policy(action), trial=0, hold_s=0.2) as view:
+        view.update(5, np.array([[0.55, 0.6], [0.1, 0.1]]), np.zeros((2, 2)), np.array([-0.1, -0.2]))
         port = int(view.url.split(":")[2].split("/")[0])
 
-        def link2_matrix():
+        def link2_position():
             found = [m for m in asyncio.run(_scene_messages(port, 0.5))
                      if m["type"] == "set_transform" and m["path"] == "/meshcat/reach2/link2"]
-            return np.array(found[-1]["matrix"]).reshape(4, 4).T if found else None
+            return np.array(found[-1]["matrix"]).reshape(4, 4).T[:3, 3] if found else None
 
         expected_data = mujoco.MjData(model := load_model("arm2"))
-        expected_data.qpos[:] = action[0]
+        expected_data.qpos[:] = action
         mujoco.mj_forward(model, expected_data)
-        gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "link2")
-        assert wait_until(lambda: (m := link2_matrix()) is not None
-                          and np.allclose(m[:3, 3], expected_data.geom_xpos[gid], atol=1e-9), timeout_s=10)
+        expected = expected_data.xpos[model.body("link2").id]
+        assert wait_until(lambda: (m := link2_position()) is not None and np.allclose(m, expected, atol=1e-9),
+                          timeout_s=10)
         assert view.frames_sent == 1
+
+
+def _overlay(port: int) -> dict:
+    """The overlay text a browser connecting now is sent (merged)."""
+    texts = [m for m in asyncio.run(_scene_messages(port, 0.3)) if m["type"] == "somarm_text"]
+    merged = {}
+    for text in texts:
+        merged.update(text)
+    return merged
+
+
+def test_the_live_page_says_the_step_the_goal_and_when_training_finished():
+    from somarm.viewer.live import LiveView
+
+    with LiveView("reach2", policy=_fixed_policy([0.4, 1.9]), hold_s=0.2, n_steps=900, n_goals=3,
+                  lines=["somq learner, trial 0"]) as view:
+        port = int(view.url.split(":")[2].split("/")[0])
+        for step in (10, 500):
+            view.update(step, np.full((1, 2), 0.5), np.zeros((1, 2)), np.array([-0.25]))
+            assert wait_until(lambda step=step: f"training: step {step:,} of 900" in _overlay(port).get("status", ""),
+                              timeout_s=10)
+            view._next_time = view._next_send = 0.0  # the next update samples and sends at once
+        text = _overlay(port)
+        assert text["title"] == "reach2: greedy pose, a cycle of 3" and text["lines"] == ["somq learner, trial 0"]
+        assert any(line.startswith("running mean reward -0.250") for line in text["caption"])
+        assert any(line.startswith("greedy error over the 3 goals: mean") for line in text["caption"])
+        assert text["caption"][0].split(" at ")[0] in {"goal 1 of 3", "goal 2 of 3", "goal 3 of 3"}
+        view.finish(900)
+        assert wait_until(lambda: _overlay(port).get("status", "").startswith("training finished after 900 steps"),
+                          timeout_s=10)
+        assert view.serving()
+
+
+def test_the_server_page_has_the_task_as_title_a_favicon_and_the_bare_address_leads_to_it():
+    import urllib.error
+    import urllib.request
+
+    with MeshcatServer(title="reach2") as server:
+        base = f"http://127.0.0.1:{server.port}"
+        page = urllib.request.urlopen(f"{base}/static/").read().decode()
+        assert "<title>reach2</title>" in page and "SomarmOverlay.install(viewer)" in page
+        assert 'src="main.min.js"' in page and "viewer.connect()" in page
+        assert urllib.request.urlopen(f"{base}/static/index.html").read().decode() == page
+        assert urllib.request.urlopen(f"{base}/static/main.min.js").status == 200
+        icon = urllib.request.urlopen(f"{base}/favicon.ico")
+        assert icon.status == 200 and icon.headers["Content-Type"] == "image/svg+xml"
+        assert icon.read().startswith(b"<svg")
+        bare = urllib.request.urlopen(f"{base}/")  # follows the redirect
+        assert bare.url == f"{base}/static/" and "<title>reach2</title>" in bare.read().decode()
 
 
 def test_live_view_is_throttled_and_survives_a_stopped_or_killed_server():
     from somarm.viewer.live import LiveView
 
     observations, actions, rewards = np.full((3, 2), 0.5), np.full((3, 2), 0.3), np.zeros(3)
-    with LiveView("reach2", max_rate_hz=20.0) as view:
+    with LiveView("reach2", policy=_fixed_policy([0.3, 0.3]), max_rate_hz=200.0, hold_s=0.05) as view:
         assert view.url.startswith("http://127.0.0.1:")
         start = time.monotonic()
         n_calls = 0
@@ -272,9 +325,9 @@ def test_live_view_is_throttled_and_survives_a_stopped_or_killed_server():
             view.update(n_calls, observations, actions, rewards)
             n_calls += 1
         elapsed = time.monotonic() - start
-        assert 2 <= view.frames_sent <= 20.0 * elapsed + 2  # throttled: not one frame per call
-        assert n_calls > 100 * view.frames_sent
-        # A frozen server (SIGSTOP) never blocks update: frames are simply not taken.
+        assert 2 <= view.frames_sent <= elapsed / 0.05 + 2  # throttled: one snapshot per hold at most
+        assert n_calls > 100 * view.frames_sent and view._n_rewards <= 200.0 * elapsed + 2
+        # A frozen server (SIGSTOP) never blocks update: snapshots are simply not taken.
         os.kill(view._server.process.pid, signal.SIGSTOP)
         start, steps = time.monotonic(), 0
         while time.monotonic() - start < 0.5:
@@ -289,27 +342,31 @@ def test_live_view_is_throttled_and_survives_a_stopped_or_killed_server():
             while time.monotonic() - start < 2.0:  # "training" keeps going
                 view.update(steps, observations, actions, rewards)
                 steps += 1
-        assert not view.alive and steps > 1000
+        assert not view.alive and not view.serving() and steps > 1000
         assert sum(issubclass(w.category, ViewerUnavailableWarning) for w in caught) == 1
+        view.finish(steps)  # nothing to send to: returns quietly
 
 
-def test_a_bad_frame_is_logged_and_the_feed_carries_on():
+def test_a_bad_snapshot_is_logged_and_the_feed_carries_on():
     import zmq
 
-    from somarm.viewer.feed import unpack_frame
-    from somarm.viewer.live import pack_frame
+    from somarm.viewer.feed import unpack_snapshot
+    from somarm.viewer.live import pack_snapshot
 
-    step, observation, action, reward = unpack_frame(pack_frame(7, [0.1, 0.2], [1.0, 2.0, 3.0], -0.5))
-    assert step == 7 and reward == -0.5 and observation.tolist() == [0.1, 0.2] and action.tolist() == [1, 2, 3]
-    with pytest.raises(ValueError, match="float64"):
-        unpack_frame(b"abc")
+    snapshot = unpack_snapshot(pack_snapshot({"kind": "goals", "step": 7, "items": {"actions": np.eye(2)}}))
+    assert snapshot["step"] == 7 and snapshot["items"]["actions"] == [[1.0, 0.0], [0.0, 1.0]]
+    with pytest.raises(ValueError, match="msgpack"):
+        unpack_snapshot(b"\xc1 not msgpack")
+    with pytest.raises(ValueError, match="a dict with a kind"):
+        unpack_snapshot(pack_snapshot({"kind": "juggling", "items": {}}))
     with MeshcatServer(live_task="reach2") as live:
         push = zmq.Context.instance().socket(zmq.PUSH)
         push.setsockopt(zmq.LINGER, 0)
         push.connect(live.feed_url)
-        push.send(b"not a frame at all!")
-        assert wait_until(lambda: "frame dropped" in live.log_path.read_text(), timeout_s=10)
-        push.send(pack_frame(1, [0.5, 0.5], [0.1, 0.2], 0.0))
+        push.send(b"not a snapshot at all!")
+        assert wait_until(lambda: "snapshot dropped" in live.log_path.read_text(), timeout_s=10)
+        push.send(pack_snapshot({"kind": "goals", "step": 1, "finished": False, "items": {
+            "observations": [[0.5, 0.5]], "actions": [[0.1, 0.2]], "greedy": True}}))
         client = MeshcatClient(live.zmq_url, timeout_s=5)
         assert client.web_url() == live.web_url  # still serving
         client.close()
@@ -321,8 +378,12 @@ def test_live_view_rejects_bad_arguments():
 
     with pytest.raises(ValueError, match="max_rate_hz"):
         LiveView("reach2", max_rate_hz=0)
+    with pytest.raises(ValueError, match="hold_s"):
+        LiveView("reach2", hold_s=0)
     with pytest.raises(ValueError, match="unknown task"):
         LiveView("juggle")
+    with pytest.raises(ValueError, match="a task name or an env"):
+        LiveView()
     with LiveView("reach2", trial=3) as view, pytest.raises(ValueError, match="trial=3 is not in this batch of 2"):
         view.update(1, np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
 
@@ -346,6 +407,7 @@ def test_cli_writes_an_offline_animation(task, tmp_path, capsys):
     assert main([task, "--html", str(out), "--goals", "3"]) == 0
     text = out.read_text()
     assert "MeshCat.Viewer" in text and len(text) > 500_000  # the viewer script is inlined
+    assert f"<title>{task}</title>" in text and "SomarmOverlay" in text
     assert "mean error" in capsys.readouterr().out
 
 
@@ -359,6 +421,11 @@ def test_cli_serves_until_ctrl_c_and_leaves_no_server():
         port = int(line.split("http://127.0.0.1:")[1].split("/")[0])
         assert listening_addresses(port) == {"127.0.0.1"}
         assert "error" in viewer.stdout.readline()  # one line per goal shown
+        import urllib.request
+
+        assert "<title>reach2</title>" in urllib.request.urlopen(f"http://127.0.0.1:{port}/").read().decode()
+        text = _overlay(port)
+        assert text["title"] == "reach2: greedy answer for each goal" and text["caption"][0].startswith("goal ")
         viewer.send_signal(signal.SIGINT)
         assert viewer.wait(timeout=15) == 130
         assert wait_until(lambda: not listening_addresses(port), timeout_s=10)
@@ -366,3 +433,27 @@ def test_cli_serves_until_ctrl_c_and_leaves_no_server():
         if viewer.poll() is None:
             viewer.kill()
             viewer.wait()
+
+
+def test_train_view_keeps_showing_the_final_policy_until_ctrl_c(tmp_path):
+    out = tmp_path / "run"
+    command = [sys.executable, "-m", "somarm.cli", "train", "reach2", "--steps", "2000", "--view", "--out", str(out),
+               "--no-progress", "--no-figures"]
+    env = dict(os.environ, MUJOCO_GL="disable")
+    training = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        first = training.stdout.readline()
+        assert first.startswith("viewer: http://127.0.0.1:"), first + training.stderr.read()
+        port = int(first.split("http://127.0.0.1:")[1].split("/")[0])
+        assert training.stdout.readline().startswith("done: 2000 steps")
+        assert "the viewer keeps showing the final policy" in training.stdout.readline()
+        assert (out / "learner.npz").is_file()  # the run is written before the viewer waits
+        assert wait_until(lambda: _overlay(port).get("status", "").startswith("training finished after 2,000"),
+                          timeout_s=10)
+        training.send_signal(signal.SIGINT)
+        assert training.wait(timeout=15) == 0
+        assert wait_until(lambda: not listening_addresses(port), timeout_s=10)
+    finally:
+        if training.poll() is None:
+            training.kill()
+            training.wait()

@@ -1,0 +1,196 @@
+"""``SOMQ``: SOM-Q in the shape of a Stable-Baselines3 model, for people who come from SB3.
+
+A thin layer over the run machinery (``somarm.run``): the environment is a task (``gym:ID`` for a
+Gymnasium id, or one of this project's tasks), the learner is built from a preset as ``somarm
+train`` builds it, ``learn`` runs the training loop, ``save`` writes a run folder that ``somarm
+evaluate`` and ``somarm view`` read, and ``load`` reads one back::
+
+    from somarm import SOMQ
+
+    model = SOMQ("Pendulum-v1", seed=0)
+    model.learn(total_timesteps=20_000)
+    action, _ = model.predict(observation, deterministic=True)
+    model.save("runs/pendulum")
+    model = SOMQ.load("runs/pendulum")
+
+Where it differs from SB3, and why:
+
+- ``n_trials`` independent learners train side by side (default 1), each on its own copy of the
+  environment; ``total_timesteps`` counts the steps of each, and ``predict`` answers for ``trial``.
+- ``predict`` is greedy only: SOM-Q's exploration (a random unit, a perturbed action) belongs to
+  learning, so ``deterministic=False`` is refused rather than answered with something else.
+- Observations are the environment's own; the model scales them as its task does
+  (``somarm.tasks.gym_envs``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from somarm import run
+from somarm.protocols import BatchedTask, Learner
+from somarm.run import RunConfig
+from somarm.run.loop import Episodes, loop
+
+__all__ = ["SOMQ"]
+
+
+def _task_name(env: Any) -> tuple[str, dict[str, Any]]:
+    """The task name and Gymnasium keywords of ``env``: an id, ``gym:ID``, a task name or an environment."""
+    from somarm import tasks
+
+    if isinstance(env, str):
+        if env.startswith("gym:") or env in tasks.names():
+            return env, {}
+        return "gym:" + env, {}
+    spec = getattr(env, "spec", None)
+    if spec is not None and getattr(spec, "id", None):
+        return "gym:" + spec.id, dict(spec.kwargs or {})
+    raise ValueError(f"env must be a Gymnasium id (such as 'Pendulum-v1'), a somarm task name or a registered "
+                     f"Gymnasium environment, got {type(env).__name__}")
+
+
+class SOMQ:
+    """SOM-Q (Smith 2002) on a Gymnasium environment or a somarm task, in SB3's shape.
+
+    Args:
+      env: a Gymnasium id (``"Pendulum-v1"``), ``"gym:ID"``, a somarm task name (``"reach2"``) or a
+        Gymnasium environment made with ``gymnasium.make`` (its id and keywords are used: the model
+        makes its own copies).
+      seed: the run's seed (every random number derives from it).
+      n_trials: independent learners trained side by side.
+      preset: a parameter table (``somarm presets``); default the task's.
+      env_kwargs: keyword arguments of ``gymnasium.make`` (``{"g": 5.0}``).
+      learner: ``somq`` (default), ``motoric`` or ``tabular``.
+      **settings: learner settings changed from the preset, typed (``epsilon=0.2``, ``gamma=0.99``).
+
+    Raises:
+      ValueError: an unknown environment or a bad setting (one line).
+    """
+
+    def __init__(self, env: Any, *, seed: int = 0, n_trials: int = 1, preset: str | None = None,
+                 env_kwargs: dict[str, Any] | None = None, learner: str = "somq", **settings: Any) -> None:
+        task, kwargs = _task_name(env)
+        config = RunConfig(task=task, learner=learner, preset=preset, overrides=dict(settings),
+                           task_params={**kwargs, **(env_kwargs or {})}, n_trials=n_trials, seed=seed)
+        self._start(config.resolved())
+
+    def _start(self, config: RunConfig, learner: Learner | None = None) -> None:
+        self.config = config
+        self.task: BatchedTask = run.make_task(config)
+        self.learner: Learner = learner if learner is not None else run.make_learner(config, self.task)
+        self.task.set_step(self.learner.t)
+        self._blocks: list[tuple[int, np.ndarray]] = []
+        self._squares: list[np.ndarray] = []
+        self._episodes: list[Episodes] = []
+        self._wall_time = 0.0
+
+    @property
+    def num_timesteps(self) -> int:
+        """Steps each trial has taken (SB3's ``num_timesteps`` for one trial)."""
+        return int(self.learner.t)
+
+    def learn(self, total_timesteps: int, *, progress_bar: bool = False) -> SOMQ:
+        """Train every trial for ``total_timesteps`` more steps; returns the model (as SB3).
+
+        Ctrl-C stops at the end of a step and keeps what was learned.
+
+        Raises:
+          ValueError: ``total_timesteps`` is not a whole number >= 1.
+        """
+        from somarm.validation import check_int
+
+        steps = check_int("total_timesteps", total_timesteps)
+        block = math.gcd(steps, 1000)
+        curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
+                      progress=progress_bar, label=f"{self.config.task}/SOMQ")
+        done = self.learner.t
+        self._blocks.append((block, curves.block_means))
+        self._squares.append(curves.block_sq_means)
+        if curves.episodes is not None:
+            shifted = dataclasses.replace(curves.episodes, ends=curves.episodes.ends + done - curves.steps_done)
+            self._episodes.append(shifted)
+        self._wall_time += curves.wall_time
+        return self
+
+    def predict(self, observation: Any, *, deterministic: bool = True, trial: int = 0) -> tuple[np.ndarray, None]:
+        """The greedy action for an observation of the environment, as SB3's ``(action, state)``.
+
+        Args:
+          observation: ``(obs_dim,)`` or a batch ``(n, obs_dim)``, the environment's own values.
+          deterministic: True (greedy); False is refused (SOM-Q explores only while it learns).
+          trial: which trial's policy answers.
+
+        Returns:
+          ``(action, None)``: ``(action_dim,)`` or ``(n, action_dim)``, inside the action Box.
+
+        Raises:
+          ValueError: ``deterministic=False``, a wrong shape or a trial out of range (one line).
+        """
+        if not deterministic:
+            raise ValueError("SOMQ.predict is greedy: give deterministic=True (SOM-Q explores only while it learns)")
+        if isinstance(trial, bool) or not isinstance(trial, (int, np.integer)) or not 0 <= trial < self.config.n_trials:
+            raise ValueError(f"trial must be a whole number in [0, {self.config.n_trials - 1}], got {trial!r}")
+        x = np.asarray(observation, dtype=np.float64)
+        single = x.ndim == 1
+        x = x.reshape(-1, x.shape[-1]) if x.ndim else x
+        if x.ndim != 2 or x.shape[1] != self.task.observation_dim:
+            raise ValueError(f"observation must have shape ({self.task.observation_dim},) or "
+                             f"(n, {self.task.observation_dim}), got {np.shape(observation)}")
+        scale = getattr(self.task, "scale", None)  # a Gymnasium task scales onto [0, 1]
+        if scale is not None:
+            x = scale(x)
+        batch = np.broadcast_to(x, (self.config.n_trials, *x.shape))
+        actions = np.asarray(self.learner.predict(np.ascontiguousarray(batch)))[trial]
+        return (actions[0] if single else actions), None
+
+    def evaluate(self, *, seed: int | None = None) -> dict[str, Any]:
+        """The greedy keys of ``summary.json`` (``run.greedy_measures``): for a Gymnasium task the mean
+        return of 100 fresh greedy episodes per trial, and its sd over trials."""
+        return run.greedy_measures(self.learner, self.task, seed=self.config.seed if seed is None else seed)
+
+    def _result(self) -> run.RunResult:
+        # Each learn() recorded blocks of its own size: shown at their common divisor, a block's mean
+        # standing for each of its parts.
+        block = math.gcd(*(size for size, _ in self._blocks)) if self._blocks else 1
+        blocks = np.zeros((0, self.config.n_trials))
+        squares = np.zeros((0, self.config.n_trials))
+        for (size, means), sq in zip(self._blocks, self._squares, strict=True):
+            blocks = np.concatenate([blocks, np.repeat(means, size // block, axis=0)])
+            squares = np.concatenate([squares, np.repeat(sq, size // block, axis=0)])
+        episodes = None
+        if self._episodes:
+            episodes = Episodes(*(np.concatenate([getattr(e, name) for e in self._episodes])
+                                  for name in ("ends", "trials", "returns", "lengths")))
+        config = dataclasses.replace(self.config, n_steps=max(block, len(blocks) * block), block=block)
+        return run.RunResult(config=config, learner=self.learner, task=self.task, block_means=blocks,
+                             block_sq_means=squares, steps_done=int(self.learner.t), wall_time=self._wall_time,
+                             episodes=episodes)
+
+    def save(self, path: str | Path) -> Path:
+        """Write a run folder (``learner.npz``, ``config.json``, ``curves.npz``, ``summary.json``, figures)
+        that ``SOMQ.load``, ``somarm evaluate`` and ``somarm view`` read.
+
+        Raises:
+          ValueError: the folder cannot be written (one line).
+        """
+        result = self._result()
+        extra = run.greedy_summary(result) if result.steps_done else {}
+        return run.write(result, path, extra_summary=extra)
+
+    @classmethod
+    def load(cls, path: str | Path) -> SOMQ:
+        """A model from a run folder (``save``'s, or ``somarm train``'s).
+
+        Raises:
+          ValueError: not a run folder, or a damaged one (one line).
+        """
+        config, learner = run.load(path)
+        model = cls.__new__(cls)
+        model._start(config, learner)
+        return model

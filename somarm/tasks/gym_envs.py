@@ -1,0 +1,417 @@
+"""Gymnasium environments as batched tasks: any registered id with ``Box`` spaces, named ``gym:ID``.
+
+``tasks.make("gym:Pendulum-v1", n_trials=N, seed=s)`` holds N independent copies of the
+environment, stepped in lockstep with a batched learner, as every multi-step task
+(``somarm.protocols.EpisodicTask``): after ``step``, ``next_observations``, ``terminal`` and
+``truncated`` say what happened in each trial, and ``reset()`` starts a new episode only in the
+trials whose episode is over. Gymnasium's two endings stay apart: ``terminated`` (a state the
+future does not follow, such as a fallen pole) is ``terminal``, so the learner does not bootstrap
+through it; ``truncated`` (a time limit) is not, so it does, from the true last observation.
+
+Seeding: each episode of trial i resets its copy with a seed drawn from trial i's own stream
+(seed, "task", i), so a trial sees the same episodes alone or in a batch, and a run is repeatable.
+
+Scaling (this project's choice, as a user of SB3 would normalise observations): the learner sees
+each observation mapped linearly from ``[low, high]`` onto ``[0, 1]`` per dimension, unclipped.
+``low`` and ``high`` are the observation ``Box``'s where both are finite; otherwise they are
+estimated once, as the 1% and 99% quantiles of observations under uniformly random actions
+(widened by a tenth of their range), from a stream of the run's seed. The estimate is a task
+parameter (``observation_low``, ``observation_high``), so the run's ``config.json`` keeps it and
+a loaded run reuses it. Actions are the action ``Box``'s, in its own units.
+
+Any other ``--task-set KEY=VALUE`` is a keyword argument of ``gymnasium.make`` (``g=5.0`` for
+Pendulum, ``max_episode_steps=500``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+from typing import Any
+
+import numpy as np
+
+from somarm.streams import PURPOSES, trial_generators, trial_ids_for
+from somarm.tasks.base import TaskBase
+from somarm.tasks.record import TaskRecord
+
+__all__ = ["PREFIX", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS",
+           "estimate_bounds"]
+
+#: What a Gymnasium task name starts with.
+PREFIX = "gym:"
+#: Keys of ``--task-set`` that are the task's own (the rest go to ``gymnasium.make``).
+_OWN = ("observation_low", "observation_high")
+#: Random-action steps behind a bounds estimate, and the quantiles taken.
+_ESTIMATE_STEPS = 5000
+_QUANTILES = (0.01, 0.99)
+
+#: The benchmarks with presets of their own (``somarm.learners.presets``) and default steps; any
+#: other id trains with the generic ``gym`` preset for ``_DEFAULT_STEPS`` steps.
+BENCHMARKS: dict[str, tuple[str, int]] = {
+    "Pendulum-v1": ("pendulum", 60_000),
+    "MountainCarContinuous-v0": ("mountaincar", 200_000),
+    "InvertedPendulum-v5": ("invertedpendulum", 100_000),
+    "Reacher-v5": ("reacher", 200_000),
+}
+_DEFAULT_STEPS = 100_000
+
+
+@dataclasses.dataclass(frozen=True)
+class GymParams:
+    """A Gymnasium task's parameters: the id, ``gymnasium.make``'s keywords, and the scaling bounds."""
+
+    env_id: str
+    kwargs: tuple[tuple[str, Any], ...] = ()  #: keyword arguments of ``gymnasium.make``, sorted by key
+    observation_low: tuple[float, ...] | None = None  #: the scaling's low per dimension (None: the Box's)
+    observation_high: tuple[float, ...] | None = None  #: the scaling's high per dimension
+
+    def make_env(self):
+        """A new copy of the environment (``gymnasium.make``)."""
+        return _make(self.env_id, dict(self.kwargs))
+
+
+def _make(env_id: str, kwargs: dict[str, Any]):
+    """``gymnasium.make``; this project's own ids (``somarm/Reach2-v0``) through Gymnasium's
+    ``module:id`` form, which imports the module that registers them first."""
+    import gymnasium
+
+    return gymnasium.make(("somarm.peers.gym:" + env_id) if env_id.startswith("somarm/") else env_id, **kwargs)
+
+
+def _gymnasium():
+    try:
+        import gymnasium
+    except ImportError:
+        raise ValueError("gym: tasks need gymnasium: pip install 'somarm[gym]'") from None
+    return gymnasium
+
+
+@functools.lru_cache(maxsize=64)
+def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
+    """The spaces and time limit of environment ``env_id`` made with ``kwargs`` (JSON), read once.
+
+    Raises:
+      ValueError: an unknown id, a missing extra, a keyword the environment refuses, or a space
+        that is not a ``Box`` (one line saying why).
+    """
+    _gymnasium()  # a one-line error where Gymnasium is missing
+    from gymnasium import error, spaces
+
+    name = PREFIX + env_id
+    try:
+        env = _make(env_id, json.loads(kwargs_json))
+    except (error.NameNotFound, error.NamespaceNotFound, error.VersionNotFound, error.UnregisteredEnv) as exc:
+        raise ValueError(f"unknown Gymnasium environment {env_id!r} ({exc}); give a registered id, "
+                         "such as gym:Pendulum-v1") from None
+    except error.DependencyNotInstalled as exc:
+        raise ValueError(f"{name} needs a package that is not installed ({str(exc).splitlines()[0]}); "
+                         "pip install 'somarm[gym]' holds gymnasium's MuJoCo environments") from None
+    except TypeError as exc:
+        raise ValueError(f"{name} does not take these parameters: {exc}") from None
+    except ImportError as exc:
+        raise ValueError(f"{name} needs a package that is not installed ({exc}); "
+                         "pip install 'somarm[gym]' holds gymnasium's MuJoCo environments") from None
+    try:
+        for what, space in (("observation", env.observation_space), ("action", env.action_space)):
+            if not isinstance(space, spaces.Box) or len(space.shape) != 1:
+                raise ValueError(f"{name} has a{'n' if what[0] in 'ao' else ''} {what} space "
+                                 f"{space}; somarm takes environments whose observation and action "
+                                 "spaces are one-dimensional Box spaces")
+        action_low = np.asarray(env.action_space.low, dtype=np.float64)
+        action_high = np.asarray(env.action_space.high, dtype=np.float64)
+        if not (np.isfinite(action_low).all() and np.isfinite(action_high).all()):
+            raise ValueError(f"{name} has an unbounded action Box; somarm's action map needs finite bounds")
+        return {
+            "observation_low": np.asarray(env.observation_space.low, dtype=np.float64),
+            "observation_high": np.asarray(env.observation_space.high, dtype=np.float64),
+            "action_low": action_low,
+            "action_high": action_high,
+            "max_episode_steps": env.spec.max_episode_steps if env.spec is not None else None,
+            "mujoco": hasattr(env.unwrapped, "model") and type(env.unwrapped.model).__name__ == "MjModel",
+        }
+    finally:
+        env.close()
+
+
+def _kwargs_json(params: GymParams) -> str:
+    return json.dumps(dict(params.kwargs), sort_keys=True)
+
+
+def _check_bounds(params: GymParams, size: int) -> None:
+    given = [params.observation_low, params.observation_high]
+    if (given[0] is None) != (given[1] is None):
+        raise ValueError("observation_low and observation_high are given together (both or neither)")
+    if given[0] is None:
+        return
+    low, high = (np.asarray(v, dtype=np.float64) for v in given)
+    if low.shape != (size,) or high.shape != (size,):
+        raise ValueError(f"observation_low and observation_high of {PREFIX}{params.env_id} are lists of "
+                         f"{size} numbers, got {low.shape[0] if low.ndim else 1} and {high.shape[0] if high.ndim else 1}")
+    if not (np.isfinite(low).all() and np.isfinite(high).all() and (high > low).all()):
+        raise ValueError("observation_low and observation_high must be finite with high > low in every dimension")
+
+
+def estimate_bounds(params: GymParams, seed: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Scaling bounds where the observation Box is infinite: the 1% and 99% quantiles of
+    ``_ESTIMATE_STEPS`` observations under uniformly random actions (episodes reset with seeds of the
+    run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite."""
+    facts = describe(params.env_id, _kwargs_json(params))
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["scaling"],))))
+    env = params.make_env()
+    seen = []
+    try:
+        observation, _ = env.reset(seed=int(rng.integers(2**31)))
+        for _ in range(_ESTIMATE_STEPS):
+            seen.append(np.asarray(observation, dtype=np.float64))
+            action = facts["action_low"] + (facts["action_high"] - facts["action_low"]) * rng.random(facts["action_low"].size)
+            observation, _, terminated, truncated, _ = env.step(action.astype(env.action_space.dtype))
+            if terminated or truncated:
+                observation, _ = env.reset(seed=int(rng.integers(2**31)))
+    finally:
+        env.close()
+    low_q, high_q = np.quantile(np.array(seen), _QUANTILES, axis=0)
+    margin = 0.1 * np.maximum(high_q - low_q, 1e-3)
+    box_low, box_high = facts["observation_low"], facts["observation_high"]
+    low = np.where(np.isfinite(box_low), box_low, low_q - margin)
+    high = np.where(np.isfinite(box_high), box_high, high_q + margin)
+    return tuple(float(v) for v in low), tuple(float(v) for v in high)
+
+
+class GymTask(TaskBase):
+    """N copies of a Gymnasium environment as a batched multi-step task (``EpisodicTask``).
+
+    Args:
+      params: a ``GymParams`` with its scaling bounds (``GymRecord.complete`` fills them in).
+      n_trials, seed, trial_ids: as every batched task (trial i is the same alone or batched).
+      backend: only "gymnasium" (the environment's own ``step``).
+    """
+
+    episodic = True
+
+    def __init__(self, params: GymParams, *, n_trials: int = 1, seed: int = 0,
+                 trial_ids: np.ndarray | None = None, backend: str = "gymnasium"):
+        if backend != "gymnasium":
+            raise ValueError(f"{PREFIX}{params.env_id} runs in gymnasium (its own step), got backend {backend!r}")
+        facts = describe(params.env_id, _kwargs_json(params))
+        self.name = PREFIX + params.env_id
+        self.params, self.backend, self.seed = params, backend, seed
+        self.trial_ids = trial_ids_for(n_trials, trial_ids)
+        self.n_trials = int(self.trial_ids.size)
+        _check_bounds(params, facts["observation_low"].size)
+        if params.observation_low is None:
+            if not (np.isfinite(facts["observation_low"]).all() and np.isfinite(facts["observation_high"]).all()):
+                raise ValueError(f"{self.name}'s observation Box is unbounded: give observation_low and "
+                                 "observation_high (a run estimates them: tasks.record(name).complete)")
+            self.scale_low, self.scale_high = facts["observation_low"], facts["observation_high"]
+        else:
+            self.scale_low = np.asarray(params.observation_low, dtype=np.float64)
+            self.scale_high = np.asarray(params.observation_high, dtype=np.float64)
+        self.observation_low = np.zeros(self.scale_low.size)
+        self.observation_high = np.ones(self.scale_low.size)
+        self.action_low, self.action_high = facts["action_low"], facts["action_high"]
+        self.max_episode_steps = facts["max_episode_steps"]
+        self.goal = np.zeros(0)  #: a Gymnasium task has no goal position of its own
+        self._generators = trial_generators(seed, self.trial_ids, "task")
+        self._envs = [params.make_env() for _ in range(self.n_trials)]
+        self._eval_envs: list[Any] = []
+        self._current = np.zeros((self.n_trials, self.scale_low.size))
+        self._over = np.ones(self.n_trials, dtype=bool)
+        self._started = False
+        self.next_observations = np.zeros_like(self._current)  #: scaled observations after the last step
+        self.terminal = np.zeros(self.n_trials, dtype=bool)  #: the last step terminated the episode
+        self.truncated = np.zeros(self.n_trials, dtype=bool)  #: the last step hit the time limit
+        self.t = 0
+
+    def __repr__(self) -> str:
+        return f"GymTask({self.params!r}, n_trials={self.n_trials})"
+
+    def close(self) -> None:
+        """Close every copy of the environment."""
+        for env in self._envs + self._eval_envs:
+            env.close()
+
+    # -- the boundary with Gymnasium -------------------------------------------------------
+    def scale(self, observations: Any) -> np.ndarray:
+        """Raw observations ``(..., obs_dim)`` as the learner sees them: ``[low, high]`` onto ``[0, 1]``."""
+        return (np.asarray(observations, dtype=np.float64) - self.scale_low) / (self.scale_high - self.scale_low)
+
+    def unscale(self, observations: Any) -> np.ndarray:
+        """The inverse of ``scale``: the environment's own observations."""
+        return self.scale_low + np.asarray(observations, dtype=np.float64) * (self.scale_high - self.scale_low)
+
+    def env_action(self, env, action: np.ndarray) -> np.ndarray:
+        """A float64 action inside the Box as the environment's dtype, kept inside its Box after rounding."""
+        space = env.action_space
+        return np.clip(action.astype(space.dtype), space.low, space.high)
+
+    # -- the BatchedTask protocol ----------------------------------------------------------
+    def reset(self) -> np.ndarray:
+        """Start new episodes in the trials whose episode is over; every trial's scaled observation."""
+        for i in np.flatnonzero(self._over):
+            observation, _ = self._envs[i].reset(seed=int(self._generators[i].integers(2**31)))
+            self._current[i] = self.scale(observation)
+        self._over[:] = False
+        self._started = True
+        return self._current.copy()
+
+    def step(self, actions: np.ndarray) -> np.ndarray:
+        """Rewards ``(n_trials,)`` for actions ``(n_trials, action_dim)``; sets the episode flags.
+
+        Raises:
+          ValueError: no ``reset`` before, or actions of the wrong shape, non-finite or out of bounds.
+        """
+        if not self._started:
+            raise ValueError(f"{self.name}: call reset() before step()")
+        actions = self.batch_actions(actions)
+        rewards = np.empty(self.n_trials)
+        for i, env in enumerate(self._envs):
+            observation, reward, terminated, truncated, _ = env.step(self.env_action(env, actions[i]))
+            rewards[i] = reward
+            self.next_observations[i] = self.scale(observation)
+            self.terminal[i], self.truncated[i] = terminated, truncated and not terminated
+        self._current[:] = self.next_observations
+        self._over = self.terminal | self.truncated
+        self._started = False
+        self.t += 1
+        return rewards
+
+    def evaluate(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        """Refused: an environment's state is more than its observation, so one step cannot be
+        scored from an observation; a Gymnasium task is scored by whole episodes (``run_episodes``).
+
+        Raises:
+          ValueError: always (one line).
+        """
+        raise ValueError(f"{self.name} is scored by whole episodes (run_episodes), not one step from an observation")
+
+    def sample_observations(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` scaled first observations ``(n, obs_dim)`` of episodes reset with seeds drawn from ``rng``."""
+        env = self.params.make_env()
+        try:
+            return np.array([self.scale(env.reset(seed=int(s))[0]) for s in self.sample_starts(rng, n)])
+        finally:
+            env.close()
+
+    def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` episode starts for ``run_episodes``: the reset seeds, ``(n,)`` integers."""
+        return rng.integers(2**31, size=int(n))
+
+    # -- whole episodes ----------------------------------------------------------------------
+    def run_episodes(self, policy, starts: np.ndarray, *, paths: bool = False) -> dict[str, np.ndarray]:
+        """Whole episodes of ``policy`` (scaled observations ``(m, obs_dim)`` -> actions ``(m, action_dim)``)
+        from the reset seeds ``starts`` ``(m,)``, all in lockstep, each to its termination or time limit.
+
+        Returns:
+          ``{"length": (m,) steps, "returns": (m,) undiscounted, "terminated": (m,) bools}``; with
+          ``paths`` also ``"path"``: each episode's raw observations, ``(m, longest + 1, obs_dim)``,
+          held at the last once the episode is over.
+        """
+        seeds = np.asarray(starts, dtype=np.int64).reshape(-1)
+        m = seeds.size
+        while len(self._eval_envs) < m:
+            self._eval_envs.append(self.params.make_env())
+        envs = self._eval_envs[:m]
+        current = np.array([self.scale(env.reset(seed=int(s))[0]) for env, s in zip(envs, seeds, strict=True)])
+        running = np.ones(m, dtype=bool)
+        length = np.zeros(m, dtype=np.int64)
+        returns = np.zeros(m)
+        terminated = np.zeros(m, dtype=bool)
+        trace = [self.unscale(current)] if paths else None
+        while running.any():
+            actions = np.clip(np.asarray(policy(current), dtype=np.float64), self.action_low, self.action_high)
+            for i in np.flatnonzero(running):
+                observation, reward, term, trunc, _ = envs[i].step(self.env_action(envs[i], actions[i]))
+                current[i] = self.scale(observation)
+                returns[i] += reward
+                length[i] += 1
+                terminated[i] = term
+                running[i] = not (term or trunc)
+            if paths:
+                trace.append(self.unscale(current))
+        out = {"length": length, "returns": returns, "terminated": terminated}
+        if paths:
+            out["path"] = np.stack(trace, axis=1)
+        return out
+
+
+class GymRecord(TaskRecord):
+    """The record of one ``gym:ID`` task, made on demand: any keyword goes to ``gymnasium.make``."""
+
+    def params_from(self, given: dict[str, Any]) -> GymParams:
+        given = dict(given)
+        own = {key: given.pop(key) for key in _OWN if key in given}
+        for key, value in own.items():
+            if value is not None and (not isinstance(value, (list, tuple)) or not all(
+                    isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)):
+                raise ValueError(f"{key} takes a JSON list of finite numbers, one per observation dimension, got {value!r}")
+        params = GymParams(self.params_env_id, tuple(sorted(given.items())),
+                           *(tuple(own[k]) if own.get(k) is not None else None for k in _OWN))
+        facts = describe(params.env_id, _kwargs_json(params))
+        _check_bounds(params, facts["observation_low"].size)
+        return params
+
+    @property
+    def params_env_id(self) -> str:
+        return self.name[len(PREFIX):]
+
+    def check_settable(self, given: dict[str, Any]) -> None:
+        """Every key is settable: it is a keyword of ``gymnasium.make`` or one of the task's own."""
+
+    def text_fields(self) -> tuple[str, ...]:
+        return ()
+
+    def check_values(self, params: dict[str, Any]) -> None:
+        """Any JSON value may be a keyword of ``gymnasium.make``; building the params checks them."""
+        self.params_from(params)
+
+    def complete(self, params: dict[str, Any], seed: int) -> dict[str, Any]:
+        """``params`` with the scaling bounds filled in where the observation Box is unbounded (estimated
+        once, from the run's seed: ``estimate_bounds``), so the run's ``config.json`` keeps them."""
+        built = self.params_from(params)
+        facts = describe(built.env_id, _kwargs_json(built))
+        finite = np.isfinite(facts["observation_low"]).all() and np.isfinite(facts["observation_high"]).all()
+        if built.observation_low is not None or finite:
+            return dict(params)
+        low, high = estimate_bounds(built, seed)
+        return {**params, "observation_low": list(low), "observation_high": list(high)}
+
+
+@functools.lru_cache(maxsize=64)
+def record_for(name: str) -> GymRecord:
+    """The record of task ``gym:ID`` (the spaces are read once, by making the environment).
+
+    Raises:
+      ValueError: as ``describe``.
+    """
+    env_id = name[len(PREFIX):]
+    if not env_id:
+        raise ValueError(f"{name!r} names no environment; give gym:ID, such as gym:Pendulum-v1")
+    facts = describe(env_id)
+    preset, n_steps = BENCHMARKS.get(env_id, ("gym", _DEFAULT_STEPS))
+    obs_dim, action_dim = facts["observation_low"].size, facts["action_low"].size
+    return GymRecord(
+        name=name,
+        summary=f"Gymnasium's {env_id}: obs {obs_dim} (scaled to [0, 1]), action {action_dim}, "
+                "multi-step episodes",
+        params=GymParams,
+        settable=(),
+        make=lambda params, **kwargs: GymTask(params, **kwargs),
+        environment=_no_dm_env(name),
+        preset=preset,
+        n_steps=n_steps,
+        model="",
+        observation_labels=tuple(f"observation {k} (scaled)" for k in range(obs_dim)),
+        action_labels=tuple(f"action {k} (normalised)" for k in range(min(action_dim, 2))),
+        view="episodes",
+        backends=("gymnasium",),
+        episodic=True,
+    )
+
+
+def _no_dm_env(name: str):
+    def environment(batched):
+        raise ValueError(f"{name} is a Gymnasium environment already: use gymnasium.make, not tasks.load")
+    return environment
