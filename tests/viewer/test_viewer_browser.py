@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import os
+import time
 from pathlib import Path
 
 import mujoco
@@ -180,6 +181,10 @@ def test_live_training_is_followed_counted_and_said_finished(browser, tmp_path):
         def watch(step, observations, actions, rewards):
             view.update(step, observations, actions, rewards)
             if step in (500, 3000):  # look at the page twice while training runs
+                # Training may outrun the hold (2,500 reach2 steps can take less than 0.3 s): offer this
+                # step again once a hold has passed, so the page is sent it whatever the machine's speed.
+                time.sleep(view.hold_s + 0.05)
+                view.update(step, observations, actions, rewards)
                 page.wait_for_function(f"() => /training: step [0-9,]+ of 4,000/.test("
                                        f"document.getElementById('somarm-panel').innerText) && "
                                        f"!document.getElementById('somarm-panel').innerText.includes("
