@@ -106,7 +106,9 @@ class EpisodicTask(BatchedTask, Protocol):
     next_observations: np.ndarray  #: (n_trials, obs_dim): where each trial is after the last step
     terminal: np.ndarray  #: (n_trials,) bools: the last step ended the episode at the goal
     truncated: np.ndarray  #: (n_trials,) bools: the last step hit the step limit (not terminal)
-    goal: np.ndarray  #: the goal the episodes reach for, e.g. the fingertip's (x, y)
+
+    def goal_of(self, observations: np.ndarray) -> np.ndarray:
+        """The goal each observation ``(..., obs_dim)`` reaches for, e.g. the fingertip's (x, y): ``(..., 2)``."""
 
     def run_episodes(self, policy, starts: np.ndarray, *, paths: bool = False) -> dict[str, np.ndarray]:
         """Whole episodes of ``policy`` (observations ``(m, obs_dim)`` -> actions ``(m, action_dim)``)
@@ -115,3 +117,8 @@ class EpisodicTask(BatchedTask, Protocol):
         Returns ``{"success": (m,) bools, "length": (m,) steps, "returns": (m,)}``, with ``paths``
         also ``"path"``: the joint angles of every timestep.
         """
+
+    def shortest_lengths(self, starts: np.ndarray) -> np.ndarray:
+        """The fewest steps from each start ``(m, obs_dim)`` to its goal, ``(m,)``: the yardstick of a
+        greedy episode's length, found by a search over the actions and checked by replaying its path
+        through ``run_episodes`` (the step limit where the search finds none)."""

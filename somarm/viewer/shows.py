@@ -369,7 +369,7 @@ def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
         return _ThrowStream(ThrowShow(model, prefix=f"/meshcat/{task_name}"), trajectory_of, target_of)
     if sweep is not None:
         return SweepShow(model, sweep, goal_of=goal_adapter(task))
-    if task.episodic:  # reach2_obstacle: the arm where it is (observed), a fixed goal
-        return ArmShow(model, prefix=f"/meshcat/{task_name}",
-                       pose_of=lambda observation, action: np.asarray(observation)[:2]).with_goal(task.goal)
+    if task.episodic:  # reach2_obstacle: the arm where it is and the episode's goal, both observed
+        return ArmShow(model, prefix=f"/meshcat/{task_name}", goal_of=task.goal_of,
+                       pose_of=lambda observation, action: np.asarray(observation)[:2])
     return ArmShow(model, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")
