@@ -174,7 +174,7 @@ def _figure(ctx: Context, trained: Trained):
     right.plot([], [], "x", color="0.3", label="x: where the target would put the fingertip")
     right.plot([], [], "o", color="k", ms=4, label="goal")
     right.set(xlim=(0.0, 1.35), ylim=(-0.05, 1.0), aspect="equal",
-              title="Trial's fingertip over the settle time from the start pose")
+              title=f"Trial {trial}: the fingertip over the settle time from the start pose")
     right.legend(fontsize=7, loc="upper right")
     return save(ctx, fig, "driven_arm.png", crop=False)
 
