@@ -179,21 +179,26 @@ def _what_was_kept(result, owner, out: Path) -> str:
 
 
 def _cmd_evaluate(args) -> int:
-    from somarm import run
+    from somarm import run, tasks
     from somarm.run import evaluation
+    from somarm.run.config import parse_assignments
 
     check_int("--observations", args.observations)
     config, learner = run.load(args.run)
+    changed = tasks.parse_params(config.task, parse_assignments(args.task_set, "--task-set"))
     seed = config.seed if args.seed is None else args.seed  # the run's own: the number summary.json has
-    task = run.task_for(config, learner)  # four_goals evaluates in the learned phase
+    task = run.task_for(config, learner, changed)  # four_goals evaluates in the learned phase
+    name = config.task + "".join(f" {key}={tasks.format_param(value)}" for key, value in changed.items())
     if task.episodic:  # whole greedy episodes, as summary.json has them (--observations does not apply)
         greedy = run.greedy_measures(learner, task, seed=seed)
         success = (f"success rate {greedy['greedy_success_rate']:.1%}; " if "greedy_success_rate" in greedy
                    else "")  # a Gymnasium task has no goal of its own
+        shortest = (f"; the shortest paths {greedy['shortest_mean_episode_length']:.2f}"
+                    if "shortest_mean_episode_length" in greedy else "")
         print(
-            f"{config.task}: greedy mean return {greedy['greedy_mean_return']:+.4f} (sd "
+            f"{name}: greedy mean return {greedy['greedy_mean_return']:+.4f} (sd "
             f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); {success}mean episode length "
-            f"{greedy['greedy_mean_episode_length']:.2f} steps (a failed episode counts at the step limit); "
+            f"{greedy['greedy_mean_episode_length']:.2f} steps (a failed episode counts at the step limit{shortest}); "
             f"{greedy['greedy_episodes']} greedy episodes per trial, seed {seed}"
         )
         return 0
@@ -201,7 +206,7 @@ def _cmd_evaluate(args) -> int:
                  evaluation.evaluation_bytes(learner, args.observations), "give fewer --observations")
     rewards = evaluation.evaluate_greedy(learner, task, n_observations=args.observations, seed=seed)
     print(
-        f"{config.task}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "
+        f"{name}: greedy mean reward {rewards.mean():+.4f} (sd {rewards.std():.4f} over "
         f"{learner.n_trials} trial(s), {args.observations} fresh observations, seed {seed})"
     )
     return 0
@@ -314,6 +319,9 @@ def _parser() -> argparse.ArgumentParser:
                           help="fresh observations (1000); an episodic task runs 100 greedy episodes per trial")
     evaluate.add_argument("--seed", type=whole_number,
                           help="seed of the fresh observations (default: the run's seed, as summary.json)")
+    evaluate.add_argument("--task-set", action="append", metavar="KEY=VALUE",
+                          help="score the run on a changed task parameter, e.g. dynamics=actuated (the "
+                               "observations and actions must keep their bounds)")
     evaluate.set_defaults(func=_cmd_evaluate)
 
     reproduce = sub.add_parser("reproduce", help="run every experiment of the paper and write REPORT.md")

@@ -112,6 +112,9 @@ class EpisodicTask(BatchedTask, Protocol):
         """``n`` episode starts drawn with ``rng``, in the form ``run_episodes`` takes (start poses
         ``(n, obs_dim)``, or a Gymnasium environment's reset seeds ``(n,)``)."""
 
+    def goal_of(self, observations: np.ndarray) -> np.ndarray:
+        """The goal each observation ``(..., obs_dim)`` reaches for, e.g. the fingertip's (x, y): ``(..., 2)``."""
+
     def run_episodes(self, policy, starts: np.ndarray, *, paths: bool = False) -> dict[str, np.ndarray]:
         """Whole episodes of ``policy`` (observations ``(m, obs_dim)`` -> actions ``(m, action_dim)``)
         from ``starts`` ``(m, obs_dim)``, all in one batch.
@@ -119,3 +122,8 @@ class EpisodicTask(BatchedTask, Protocol):
         Returns ``{"length": (m,) steps, "returns": (m,)}`` and, for a task with a goal, ``"success":
         (m,) bools``; with ``paths`` also ``"path"``: the state (joint angles, observations) of every timestep.
         """
+
+    def shortest_lengths(self, starts: np.ndarray) -> np.ndarray:
+        """The fewest steps from each start ``(m, obs_dim)`` to its goal, ``(m,)``: the yardstick of a
+        greedy episode's length, found by a search over the actions and checked by replaying its path
+        through ``run_episodes`` (the step limit where the search finds none)."""

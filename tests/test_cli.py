@@ -237,14 +237,62 @@ def test_evaluate_scores_with_the_runs_seed_unless_told(tmp_path, capsys):
     assert len(err) == 1 and "--observations 10000000000 for 2 trial(s) needs about" in err[0], err
 
 
+def test_evaluate_task_set_replays_a_kinematic_run_through_the_servos(tmp_path, capsys):
+    from somarm import run, tasks
+    from somarm.run import evaluation
+
+    out = tmp_path / "run"
+    assert main(["train", "reach2", "--steps", "300", "--trials", "2", "--seed", "3", "--no-progress",
+                 "--no-figures", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(out), "--task-set", "dynamics=actuated"]) == 0
+    said = capsys.readouterr().out
+    # The same number as scoring the loaded learner on the actuated task by hand, and not the kinematic one.
+    config, learner = run.load(out)
+    actuated = tasks.make("reach2", n_trials=2, seed=3, dynamics="actuated")
+    expected = evaluation.evaluate_greedy(learner, actuated, seed=3).mean()
+    kinematic = json.loads((out / "summary.json").read_text())["greedy_mean_reward"]
+    assert said.startswith("reach2 dynamics=actuated: greedy mean reward") and f"{expected:+.4f}" in said, said
+    assert abs(expected - kinematic) > 1e-3
+    assert main(["evaluate", str(out), "--task-set", "dynamics=actuated", "--task-set", "settle_time=1"]) == 0
+    assert "reach2 dynamics=actuated settle_time=1:" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("task_set, expected", [
+    (["bogus=1"], "unknown parameter(s) bogus for task reach2; its parameters: centre_x"),
+    (["dynamics=torque"], "dynamics must be one of kinematic, actuated, got 'torque'"),
+    (["settle_time=soon"], "task parameter settle_time of reach2 takes a number"),
+    (["radius"], "--task-set takes KEY=VALUE, got 'radius'"),
+    (["radius=0.1", "radius=0.2"], "--task-set radius is given twice"),
+    (["radius=0.4"], "the goal circle must lie within the arm's reach"),
+])
+def test_evaluate_refuses_a_bad_task_set_in_one_line(tmp_path, capsys, task_set, expected):
+    out = tmp_path / "run"
+    assert main(["train", "reach2", "--steps", "100", "--no-progress", "--no-figures", "--out", str(out)]) == 0
+    capsys.readouterr()
+    args = [item for value in task_set for item in ("--task-set", value)]
+    _one_line_error(capsys, main(["evaluate", str(out), *args]), expected)
+
+
+def test_evaluate_refuses_a_task_set_that_changes_the_learners_bounds(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["train", "reach2_obstacle", "--steps", "100", "--block", "50", "--no-progress", "--no-figures",
+                 "--out", str(out)]) == 0
+    capsys.readouterr()
+    _one_line_error(capsys, main(["evaluate", str(out), "--task-set", "max_step=0.2"]),
+                    "--task-set max_step=0.2 changes the task's action bounds from those the learner was trained on")
+
+
 def test_an_episodic_run_reports_its_greedy_return_not_a_one_step_reward(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["train", "reach2_obstacle", "--steps", "200", "--trials", "2", "--no-progress", "--no-figures",
                  "--out", str(out)]) == 0
     trained = capsys.readouterr().out
     summary = json.loads((out / "summary.json").read_text())
-    assert {"greedy_mean_return", "greedy_sd_return", "greedy_success_rate", "greedy_mean_episode_length"} <= set(
-        summary)
+    assert {"greedy_mean_return", "greedy_sd_return", "greedy_success_rate", "greedy_mean_episode_length",
+            "shortest_mean_episode_length"} <= set(summary)
+    # The shortest paths from the same starts: a few steps around the wall, never more than the greedy episodes.
+    assert 2 <= summary["shortest_mean_episode_length"] <= summary["greedy_mean_episode_length"]
     assert "greedy_mean_reward" not in summary and "greedy_sd_reward" not in summary
     # Every step pays at most -1, and a failed episode counts at the 20-step limit.
     assert summary["greedy_mean_return"] <= -summary["greedy_mean_episode_length"] < 0
@@ -256,6 +304,7 @@ def test_an_episodic_run_reports_its_greedy_return_not_a_one_step_reward(tmp_pat
     said = capsys.readouterr().out
     assert f"greedy mean return {summary['greedy_mean_return']:+.4f}" in said, said
     assert f"success rate {summary['greedy_success_rate']:.1%}" in said and "reward" not in said
+    assert f"the shortest paths {summary['shortest_mean_episode_length']:.2f}" in said
 
 
 def test_reproduce_and_compare_take_a_first_seed(tmp_path):

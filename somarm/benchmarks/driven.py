@@ -1,7 +1,7 @@
 """Rows of ``somarm bench tasks`` for the driven arms: actuated reach and reach2_obstacle steps.
 
-An actuated reach evaluation integrates the servos for the settle time (100 timesteps at the
-default 1 s); a reach2_obstacle step integrates one control interval (30 timesteps) with contacts.
+An actuated reach evaluation integrates the servos for the settle time (20 timesteps at the
+default 0.2 s); a reach2_obstacle step integrates one control interval (30 timesteps) with contacts.
 Each is timed at the experiment's batch size (the trials of the task's preset) and at a large
 batch, where ``mujoco.rollout`` shares the work between threads.
 """
@@ -50,5 +50,5 @@ def print_rows(*, quick: bool, repeats: int) -> None:
         rate_small = measure_row(name, params, small, repeats=repeats, steps=steps_small)
         rate_large = measure_row(name, params, large, repeats=repeats, steps=steps_large)
         print(f"{label:22s} {small:6d} {rate_small:10.3g} {large:11d} {rate_large:10.3g}", flush=True)
-    print("actuated reach: one evaluation integrates the settle time (1 s, 100 timesteps); "
+    print("actuated reach: one evaluation integrates the settle time (0.2 s, 20 timesteps); "
           "reach2_obstacle: one trial-step integrates 0.3 s (30 timesteps) with contacts.")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from somarm import plots
+from somarm.reproduce import metrics
 from somarm.reproduce.common import (
     MOTORIC_CHOICE,
     Context,
@@ -16,9 +17,9 @@ from somarm.reproduce.common import (
 )
 from somarm.reproduce.figures import save, unit_square
 from somarm.reproduce.report import Claim, Section
-from somarm.run import RunConfig, RunResult
+from somarm.run import RunConfig, RunResult, evaluation
 
-__all__ = ["KINDS", "switch_step", "groups", "train", "phase_errors", "four_goals"]
+__all__ = ["KINDS", "switch_step", "groups", "train", "phase_errors", "edge_counts", "four_goals"]
 
 plt = plots.pyplot()
 
@@ -75,6 +76,26 @@ def phase_errors(steps: np.ndarray, block_means: np.ndarray, switch: int, early:
         errors[f"{phase} early"] = -block_means[early_blocks[phase]].mean()
         errors[f"{phase} whole"] = -block_means[whole_blocks[phase]].mean()
     return errors
+
+
+#: A trial's action map has piled at the edge when at least this share of its units is there.
+_PILED = 0.9
+
+
+def edge_counts(somq: RunResult, seed: int, n_observations: int) -> dict[str, int]:
+    """SOM-Q's trials at the end of the run: how many failed (greedy error on fresh observations above
+    twice the median over trials), and how many of those have their action units piled at the -pi
+    edge of the paper's box (``metrics.edge_share`` of at least 90%).
+
+    Returns:
+      ``{name: count}``, the names as the report prints them.
+    """
+    greedy = -evaluation.evaluate_greedy(somq.learner, somq.task, n_observations=n_observations, seed=seed)
+    failed = metrics.failed_trials(greedy)
+    piled = metrics.edge_share(somq.learner.action_weights, somq.task.action_low) >= _PILED
+    return {"SOM-Q trials failed at the end (greedy error above twice the median)": int(failed.sum()),
+            f"of them with {100 * _PILED:g}% or more of their action units within {metrics.EDGE_WIDTH} rad of -pi":
+            int((failed & piled).sum())}
 
 
 def _claim(errors: dict[str, dict[str, float]]) -> Claim:
@@ -166,6 +187,7 @@ def four_goals(ctx: Context) -> Section:
         "and over the whole phase.",
     ]
     section.claims.append(_claim(errors))
+    section.counts.update(edge_counts(runs["somq"], ctx.seed, ctx.pick(1000, 100)))
     section.figures.append(_curves_figure(ctx, runs, switch))
     section.figures += _map_figures(ctx, runs["somq"], switch)
     return section

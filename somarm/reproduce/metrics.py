@@ -9,7 +9,9 @@ import numpy as np
 
 __all__ = [
     "FAILED_FACTOR",
+    "EDGE_WIDTH",
     "failed_trials",
+    "edge_share",
     "chebyshev_distances",
     "topographic_error",
     "nearest_is_neighbour",
@@ -50,6 +52,32 @@ def failed_trials(errors: np.ndarray, factor: float = FAILED_FACTOR) -> np.ndarr
     if not factor > 1.0:
         raise ValueError(f"factor must be above 1, got {factor!r}")
     return errors > factor * float(np.median(errors))
+
+
+#: An action unit sits at the box's edge when one of its angles is within this of a bound (rad).
+EDGE_WIDTH = 0.06
+
+
+def edge_share(action_weights: np.ndarray, low: np.ndarray, high: np.ndarray | None = None,
+               width: float = EDGE_WIDTH) -> np.ndarray:
+    """The share of each trial's action units piled at the edge of the action box.
+
+    A unit counts when one of its dimensions lies within ``width`` of that dimension's lower bound
+    (for the arms: an angle within 0.06 rad of -pi), or of its upper bound when ``high`` is given.
+
+    Args:
+      action_weights: ``(n_trials, n_units, action_dim)``.
+      low: ``(action_dim,)`` the lower bounds; high: the upper bounds, or None for the lower edge only.
+      width: how near a bound counts as at it.
+
+    Returns:
+      ``(n_trials,)`` shares in [0, 1].
+    """
+    weights = np.asarray(action_weights, dtype=float)
+    near = weights - np.asarray(low, dtype=float) < width
+    if high is not None:
+        near |= np.asarray(high, dtype=float) - weights < width
+    return near.any(axis=-1).mean(axis=-1)
 
 
 def chebyshev_distances(grid: np.ndarray) -> np.ndarray:

@@ -84,16 +84,22 @@ def measure(trained: Trained) -> dict:
       trained: ``train``'s answer.
 
     Returns:
-      The numbers the claims read, by name (``errors`` and the topology measures per trial).
+      The numbers the claims read, by name (``errors``, ``edge``: the share of each trial's action units
+      at the -pi edge, and the topology measures per trial).
     """
     learner = trained.result.learner
     errors = final_error(trained.result, 1000)
     n_trials, n_actions = len(errors), learner.q.shape[2]
     median = float(np.median(errors))
+    failed = metrics.failed_trials(errors)
+    edge = metrics.edge_share(learner.action_weights, trained.result.task.action_low)
     return {
         "errors": errors,
         "median": median,
-        "failed": int(metrics.failed_trials(errors).sum()),
+        "failed": int(failed.sum()),
+        "failed mask": failed,
+        "edge": edge,
+        "failed at the edge": int((failed & (edge >= _PILED)).sum()),
         "allowed": max(1, round(n_trials / 20)),
         **topology(learner.input_weights, learner.input_grid, learner.action_weights, learner.action_grid,
                    learner.q, trained.goals),
@@ -102,16 +108,29 @@ def measure(trained: Trained) -> dict:
     }
 
 
+#: A trial's action map has piled at the edge when at least this share of its units is there.
+_PILED = 0.9
+
+
+def _edge_text(m: dict) -> str:
+    """Where the failed trials' action units are: piled at the -pi edge of the paper's box, or not."""
+    others = m["edge"][~m["failed mask"]]
+    return (f"{m['failed at the edge']} of the {m['failed']} failed trials have {fmt(100 * _PILED, 3)}% or more "
+            f"of their action units within {metrics.EDGE_WIDTH} rad of -pi, the edge of the paper's box (the "
+            f"other trials at most {fmt(100 * others.max(), 3)}%).")
+
+
 def _claims(m: dict, greedy: np.ndarray) -> list[Claim]:
     errors, te, nn, jumps = m["errors"], m["te"], m["nn"], m["jumps"]
     return [
         Claim(
             "Fig. 8: at most about one trial in twenty fails to reach near-mean performance.",
             f"{m['failed']} of {len(errors)} trials have a final error above twice the median "
-            f"({fmt(metrics.FAILED_FACTOR * m['median'])}); final errors {fmt(errors.min())} to {fmt(errors.max())}.",
+            f"({fmt(metrics.FAILED_FACTOR * m['median'])}); final errors {fmt(errors.min())} to {fmt(errors.max())}. "
+            + _edge_text(m),
             m["failed"] <= m["allowed"],
             f"failures <= {m['allowed']}",
-            values={"failing trials": m["failed"]},
+            values={"failing trials": m["failed"], "failed at the -pi edge": m["failed at the edge"]},
         ),
         Claim(
             "Fig. 7: the action units come to occupy highly rewarded regions for the whole range of inputs.",
@@ -201,6 +220,9 @@ def reach2(ctx: Context) -> Section:
         "the map distance between the greedy action units of neighbouring input units.",
     ]
     section.claims += _claims(m, trained.greedy)
+    section.counts.update({"failed trials (final error above twice the median)": m["failed"],
+                           f"of them with {100 * _PILED:g}% or more of their action units within "
+                           f"{metrics.EDGE_WIDTH} rad of -pi": m["failed at the edge"]})
     section.figures += _curve_figures(ctx, trained.result)
     section.figures += _map_figures(ctx, trained, m["typical"])
     return section

@@ -57,6 +57,9 @@ class Section:
     notes: list[str] = field(default_factory=list)
     choices: list[str] = field(default_factory=list)
     wall_time_s: float = 0.0
+    #: Numbers reported at every seed without a test, by name (a count of failed trials, say); after
+    #: ``merge_seeds`` each holds the list of every seed's number.
+    counts: dict[str, float | list[float]] = field(default_factory=dict)
 
 
 def _verdict(holds: bool | None) -> str:
@@ -87,7 +90,21 @@ def merge_seeds(sections: list[Section], seeds: list[int]) -> Section:
         holds = True if all(v is True for v in verdicts) else (False if all(v is False for v in verdicts) else None)
         claims.append(Claim(claim.claim, f"seed {seeds[0]}: {claim.measured}", holds, claim.test,
                             dict(claim.values), per_seed))
-    return Section(first.name, first.title, first.figures, claims, first.notes, first.choices)
+    counts = {name: [float(s.counts.get(name, np.nan)) for s in sections] for name in first.counts}
+    return Section(first.name, first.title, first.figures, claims, first.notes, first.choices, counts=counts)
+
+
+def _count_lines(counts: dict[str, float | list[float]], seeds: list[int]) -> list[str]:
+    """One line per count: its value, or every seed's values and their sum."""
+    lines = []
+    for name, value in counts.items():
+        if isinstance(value, list):
+            listed = ", ".join(_number(v) for v in value)
+            lines.append(f"- {name}: {listed} at seeds {seeds[0]} to {seeds[-1]}, {_number(float(np.nansum(value)))} "
+                         "in all")
+        else:
+            lines.append(f"- {name}: {_number(float(value))}")
+    return lines
 
 
 def claim_record(c: Claim) -> dict:
@@ -113,11 +130,12 @@ def _json_number(x) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
+def render(sections: list[Section], *, header: list[str], out_dir: Path, seeds: list[int] | None = None) -> str:
     """The whole REPORT.md: header, the claims table, then one part per experiment.
 
     ``out_dir`` is the folder REPORT.md is written to: every figure lies under it and is linked
-    relative to it (``figures/x.png``), never by a path that names the folder.
+    relative to it (``figures/x.png``), never by a path that names the folder. ``seeds``: the seeds a
+    merged section's counts were measured at.
     """
     lines = [
         "# somarm: reproduction of Smith (2002)",
@@ -151,6 +169,9 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path) -> str:
         if section.notes:
             lines.append("")
             lines += [f"{note}" for note in section.notes]
+        if section.counts:
+            lines += ["", "Counted (no test):", ""]
+            lines += _count_lines(section.counts, seeds or [0])
         if section.choices:
             lines += ["", "This project's choices (the paper gives no value):", ""]
             lines += [f"- {choice}" for choice in section.choices]

@@ -17,6 +17,7 @@ from somarm.reproduce import (
     benchmarks,
     beyond,
     delayed,
+    driven,
     four_goals,
     more_inputs,
     neighbourhood_q,
@@ -43,6 +44,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
     "throw_maps": throw_maps.throw_maps,
     "neighbourhood_q": neighbourhood_q.neighbourhood_q,
     "more_inputs": more_inputs.more_inputs,
+    "driven_arm": driven.driven_arm,
     "delayed_reward": delayed.delayed_reward,
     # Not the paper's: the continuous response its section 6 suggests, apart from the paper's claims.
     "beyond": beyond.beyond,
@@ -208,7 +210,7 @@ def _write(
         "the angle range), the Motoric Map's rules, run lengths and the levels and bounds used in the verdicts "
         "are this project's choices, stated in each part; the paper publishes none of them.",
     ]
-    atomic_write_text(out / "REPORT.md", render(sections, header=header, out_dir=out))
+    atomic_write_text(out / "REPORT.md", render(sections, header=header, out_dir=out, seeds=seeds))
     atomic_write_json(
         out / "claims.json",
         {
@@ -219,7 +221,8 @@ def _write(
             "complete": complete,
             "wall_time_s": round(total, 2),
             "experiments": {
-                s.name: {"wall_time_s": round(s.wall_time_s, 2), "claims": [claim_record(c) for c in s.claims]}
+                s.name: {"wall_time_s": round(s.wall_time_s, 2), "claims": [claim_record(c) for c in s.claims],
+                         "counts": s.counts}
                 for s in sections
             },
         },

@@ -8,7 +8,8 @@ from somarm.protocols import BatchedTask, EpisodicTask, Learner
 from somarm.streams import PURPOSES
 from somarm.validation import check_int, check_memory
 
-__all__ = ["evaluation_rng", "evaluate_greedy", "evaluation_bytes", "greedy_episodes"]
+__all__ = ["evaluation_rng", "evaluate_greedy", "evaluation_bytes", "episode_starts", "greedy_episodes",
+           "shortest_lengths"]
 
 
 def evaluation_rng(seed: int) -> np.random.Generator:
@@ -59,6 +60,12 @@ def evaluation_bytes(learner: Learner, n_observations: int) -> float:
     return 16.0 * n_observations * (learner.observation_low.size + learner.n_trials)
 
 
+def episode_starts(task: EpisodicTask, n_episodes: int, seed: int) -> np.ndarray:
+    """The starts every trial's greedy episodes start from (``task.sample_starts`` on the evaluation
+    stream of ``seed``: start observations, or a Gymnasium environment's reset seeds)."""
+    return task.sample_starts(evaluation_rng(seed), check_int("n_episodes", n_episodes))
+
+
 def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 100, seed: int = 0) -> dict[str, np.ndarray]:
     """Each trial's greedy policy run for whole episodes of a multi-step task (``task.episodic``).
 
@@ -77,25 +84,45 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
       episodes that reach the goal (only for a task with a goal); the mean steps over all episodes, a failed episode counting at
       the step limit (where ``run_episodes`` cuts it); and the mean undiscounted return per episode.
       A trial that reaches the goal once in 100 episodes thus has a mean length near the step limit,
-      not the length of its one success.
+      not the length of its one success. Also ``"lengths"`` and ``"success"``, ``(n_trials, n_episodes)``:
+      every episode's steps and whether it reached the goal.
 
     Raises:
       ValueError: a task without whole episodes, or a bad ``n_episodes``.
     """
     if not task.episodic:
         raise ValueError(f"task {task.name} has one-step episodes; greedy episodes need a multi-step task")
-    n_episodes = check_int("n_episodes", n_episodes)
-    starts = task.sample_starts(evaluation_rng(seed), n_episodes)
+    starts = episode_starts(task, n_episodes, seed)
     n_trials = learner.n_trials
 
     def policy(observations: np.ndarray) -> np.ndarray:
         return learner.predict(observations.reshape(n_trials, n_episodes, -1)).reshape(len(observations), -1)
 
     episodes = task.run_episodes(policy, np.tile(starts, (n_trials,) + (1,) * (starts.ndim - 1)))
+    lengths = episodes["length"].reshape(n_trials, n_episodes)
     out = {
-        "mean_length": episodes["length"].reshape(n_trials, n_episodes).mean(axis=1),
+        "mean_length": lengths.mean(axis=1),
         "mean_return": episodes["returns"].reshape(n_trials, n_episodes).mean(axis=1),
+        "lengths": lengths,
     }
     if "success" in episodes:  # a task with a goal says whether each episode reached it
-        out["success_rate"] = episodes["success"].reshape(n_trials, n_episodes).mean(axis=1)
+        out["success"] = episodes["success"].reshape(n_trials, n_episodes)
+        out["success_rate"] = out["success"].mean(axis=1)
     return out
+
+
+#: The shortest paths of the last few evaluation streams: (task, its parameters, episodes, seed) ->
+#: lengths. A search is deterministic and costs seconds; runs of one task scored on the same stream
+#: (a sweep's points, the two learners of a report) share it.
+_SHORTEST: dict[tuple, np.ndarray] = {}
+
+
+def shortest_lengths(task: EpisodicTask, *, n_episodes: int = 100, seed: int = 0) -> np.ndarray:
+    """The fewest steps from each start of ``episode_starts`` to its goal (``task.shortest_lengths``:
+    found by search, checked by replay), ``(n_episodes,)``; the same episodes ``greedy_episodes`` runs."""
+    key = (task.name, repr(getattr(task, "params", None)), int(n_episodes), int(seed))
+    if key not in _SHORTEST:
+        if len(_SHORTEST) >= 8:
+            _SHORTEST.pop(next(iter(_SHORTEST)))
+        _SHORTEST[key] = np.asarray(task.shortest_lengths(episode_starts(task, n_episodes, seed)))
+    return _SHORTEST[key].copy()

@@ -127,22 +127,43 @@ def _check_learner_fits(config: RunConfig, learner: Learner, path: Path) -> None
     if learner.seed != config.seed or learner.trial_ids.tolist() != config.trial_ids_array().tolist():
         raise ValueError(f"{where}: its seed and trials ({learner.seed}, {learner.trial_ids.tolist()}) differ "
                          f"from the config's ({config.seed}, {config.trial_ids_array().tolist()})")
-    task = make_task(config)
+    if (what := _bounds_differ(learner, make_task(config))) is not None:
+        raise ValueError(f"{where}: its {what} bounds are not those of task {config.task!r} "
+                         "(a learner of another task?)")
+
+
+def _bounds_differ(learner: Learner, task: BatchedTask) -> str | None:
+    """"observation" or "action" if the learner's bounds of that side are not the task's; None if both fit."""
     for what, ours, theirs in (
         ("observation", (learner.observation_low, learner.observation_high),
          (task.observation_low, task.observation_high)),
         ("action", (learner.action_low, learner.action_high), (task.action_low, task.action_high)),
     ):
         if ours[0].shape != theirs[0].shape or not all(map(np.allclose, ours, theirs)):
-            raise ValueError(f"{where}: its {what} bounds are not those of task {config.task!r} "
-                             "(a learner of another task?)")
+            return what
+    return None
 
 
-def task_for(config: RunConfig, learner: Learner) -> BatchedTask:
-    """The task of a loaded run for all the learner's trials, in the learner's phase (four_goals)."""
+def task_for(config: RunConfig, learner: Learner, task_params: dict[str, Any] | None = None) -> BatchedTask:
+    """The task of a loaded run for all the learner's trials, in the learner's phase (four_goals).
+
+    Args:
+      config, learner: a run as ``load`` returns it.
+      task_params: task parameters to change from the run's (typed, as ``tasks.parse_params`` reads
+        ``--task-set``), to score the learner on another task: ``{"dynamics": "actuated"}`` replays a
+        kinematic reach's targets through the servos.
+
+    Raises:
+      ValueError: an unknown parameter or a bad value, or parameters that change the observations or
+        actions the learner was trained on (one line naming them).
+    """
     from somarm import tasks
 
-    task = tasks.make(config.task, n_trials=learner.n_trials, seed=config.seed, backend=config.backend,
-                      **config.task_params)
+    params = {**config.task_params, **tasks.check_params(config.task, dict(task_params or {}))}
+    task = tasks.make(config.task, n_trials=learner.n_trials, seed=config.seed, backend=config.backend, **params)
+    if task_params and (what := _bounds_differ(learner, task)) is not None:
+        changed = ", ".join(f"{key}={tasks.format_param(value)}" for key, value in task_params.items())
+        raise ValueError(f"--task-set {changed} changes the task's {what} bounds from those the learner "
+                         "was trained on; give parameters that keep them")
     task.set_step(learner.t)
     return task

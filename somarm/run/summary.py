@@ -17,7 +17,8 @@ __all__ = ["GREEDY_EPISODES", "greedy_measures", "greedy_cost", "greedy_summary"
 GREEDY_EPISODES = 100
 
 
-def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observations: int = 1000) -> dict[str, Any]:
+def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observations: int = 1000,
+                    shortest: bool = True) -> dict[str, Any]:
     """The greedy keys of ``summary.json`` for a trained learner on its task.
 
     A one-step task scores the greedy action on ``n_observations`` fresh observations:
@@ -28,7 +29,9 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
     undiscounted return per episode, mean over episodes per trial, then mean and sd over trials),
     ``greedy_success_rate`` (episodes reaching the goal, over all trials; a task with a goal only), and
     ``greedy_mean_episode_length`` (steps over all episodes, a failed episode counting at the step
-    limit), ``greedy_episodes``.
+    limit), ``greedy_episodes``, and beside the greedy length ``shortest_mean_episode_length``: the
+    mean over the same episodes of the shortest path from each start (``task.shortest_lengths``; a search
+    of some seconds, left out with ``shortest=False``, as a sweep, which ranks by the return, does).
 
     Raises:
       ValueError: the learner cannot act on the task (the caller reports it).
@@ -37,15 +40,18 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
 
     if task.episodic:
         episodes = evaluation.greedy_episodes(learner, task, n_episodes=GREEDY_EPISODES, seed=seed)
-        out = {
+        measures = {
             "greedy_mean_return": float(episodes["mean_return"].mean()),
             "greedy_sd_return": float(episodes["mean_return"].std()),
             "greedy_mean_episode_length": float(episodes["mean_length"].mean()),
             "greedy_episodes": GREEDY_EPISODES,
         }
-        if "success_rate" in episodes:
-            out["greedy_success_rate"] = float(episodes["success_rate"].mean())
-        return out
+        if "success_rate" in episodes:  # a task with a goal says whether each episode reached it
+            measures["greedy_success_rate"] = float(episodes["success_rate"].mean())
+        if shortest and hasattr(task, "shortest_lengths"):  # a task whose shortest paths can be searched
+            lengths = evaluation.shortest_lengths(task, n_episodes=GREEDY_EPISODES, seed=seed)
+            measures["shortest_mean_episode_length"] = float(lengths.mean())
+        return measures
     greedy = evaluation.evaluate_greedy(learner, task, n_observations=n_observations, seed=seed)
     return {
         "greedy_mean_reward": float(greedy.mean()),
@@ -68,15 +74,17 @@ def greedy_cost(greedy: dict[str, Any]) -> tuple[float, float]:
     return -greedy["greedy_mean_reward"], greedy["greedy_sd_reward"]
 
 
-def greedy_summary(result: RunResult, n_observations: int = 1000) -> dict[str, Any]:
-    """The summary keys of the run's greedy evaluation (``greedy_measures``, seeded by the run's seed).
+def greedy_summary(result: RunResult, n_observations: int = 1000, *, shortest: bool = True) -> dict[str, Any]:
+    """The summary keys of the run's greedy evaluation (``greedy_measures``, seeded by the run's seed;
+    ``shortest``: with an episodic task's shortest paths).
 
     A failed evaluation gives ``{"greedy_error": message}`` instead, so the run is still written.
     """
     if result.steps_done == 0:
         return {}
     try:
-        return greedy_measures(result.learner, result.task, seed=result.config.seed, n_observations=n_observations)
+        return greedy_measures(result.learner, result.task, seed=result.config.seed, n_observations=n_observations,
+                               shortest=shortest)
     except ValueError as exc:
         return {"greedy_error": str(exc)}
 

@@ -122,7 +122,7 @@ def _number(value: float | None) -> float:
 
 def _row(index: int, seed: int, result: run.RunResult) -> dict:
     """Result row of one trained point: the errors its run folder's summary.json would hold."""
-    greedy = run.greedy_summary(result, GREEDY_OBSERVATIONS)
+    greedy = run.greedy_summary(result, GREEDY_OBSERVATIONS, shortest=False)  # ranked by the return
     if not greedy or "greedy_error" in greedy:
         raise ValueError(greedy.get("greedy_error", "no step was trained"))
     greedy_error, greedy_error_sd = run.greedy_cost(greedy)

@@ -295,6 +295,10 @@ class GymTask(TaskBase):
         finally:
             env.close()
 
+    def goal_of(self, observations: np.ndarray) -> np.ndarray:
+        """No goal position: ``(..., 0)`` (a Gymnasium environment's goal, if any, is in its observation)."""
+        return np.zeros((*np.shape(observations)[:-1], 0))
+
     def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` episode starts for ``run_episodes``: the reset seeds, ``(n,)`` integers."""
         return rng.integers(2**31, size=int(n))

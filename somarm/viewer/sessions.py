@@ -150,15 +150,15 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
 def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: int, about: dict) -> Session:
     """Greedy episodes of a multi-step task from ``starts`` ``(n, obs_dim)``, with their MuJoCo paths."""
 
-    def policy(angles: np.ndarray) -> np.ndarray:
-        batch = np.broadcast_to(angles, (learner.n_trials, *angles.shape)).copy()
+    def policy(observations: np.ndarray) -> np.ndarray:
+        batch = np.broadcast_to(observations, (learner.n_trials, *observations.shape)).copy()
         return np.asarray(learner.predict(batch))[trial]
 
     episodes = task.run_episodes(policy, starts, paths=True)
     ends = 1 + episodes["length"] * task.control_steps
     paths = [episodes["path"][k, :ends[k]] for k in range(len(starts))]
     finals = np.array([path[-1] for path in paths])
-    return Session(task_name, starts, finals, task.distances(finals), None,
+    return Session(task_name, starts, finals, task.distances(finals, task.goal_of(starts)), None,
                    MotionShow(shows.show_for_task(task_name, task), episode_describer(task)), paths,
                    what="greedy episodes from different starts", **about)
 

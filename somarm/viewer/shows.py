@@ -317,10 +317,9 @@ def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
         return throw_show(task_name, task, model)
     if sweep is not None:
         return SweepShow(model, sweep, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")
-    if task.episodic:  # reach2_obstacle: the arm where it is (observed), a fixed goal
+    if task.episodic:  # reach2_obstacle: the arm where it is and the episode's goal, both observed
         show = ArmShow(model, prefix=f"/meshcat/{task_name}", pose_of=lambda observation, action: np.asarray(
             observation)[:2])
-        fixed = np.asarray(task.goal, dtype=np.float64)[:2].copy()
-        show.goal_of = lambda observation: fixed
+        show.goal_of = task.goal_of
         return show
     return ArmShow(model, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")

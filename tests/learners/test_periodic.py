@@ -87,7 +87,7 @@ def test_the_setting_is_off_by_default_and_a_declaration_alone_changes_nothing()
     assert SOMQConfig().periodic_actions is False
     for name in ("table1", "table2", "table5", "table5+", "obstacle"):
         assert presets.get(name).periodic_actions is False
-    assert presets.get("table1+").periodic_actions is True
+    assert presets.get("table1+").periodic_actions is True and presets.get("table2+").periodic_actions is True
     config = SOMQConfig(input_shape=(3,), action_shape=(5,), epsilon=0.8)
     declared = SOMQ(config, n_trials=2, seed=4, action_periodic=ANGLE, **BOX)
     plain = SOMQ(config, n_trials=2, seed=4, **BOX)

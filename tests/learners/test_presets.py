@@ -8,7 +8,7 @@ from somarm.learners.motoric import MotoricConfig
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig
 
-NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table5+"]
+NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table2+", "table5+"]
 BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
 
 
@@ -29,6 +29,16 @@ def test_plus_presets_change_only_schedules_of_their_table_and_table1_plus_the_c
     assert presets.get("table1+").lambda_a.value(10**6) == 0.1 and presets.get("table1+").periodic_actions
     assert any("periodic_actions" in choice for choice in presets.PRESETS["table1+"].choices)
     assert presets.get("table5+").epsilon.value(10**6) == 0.02
+
+
+def test_table2_plus_is_table2_on_circles_with_the_response_chosen_on_tuning_seeds():
+    base, plus = presets.get("table2").to_dict(), presets.get("table2+").to_dict()
+    assert {key for key in base if base[key] != plus[key]} == {"periodic_actions", "response"}
+    assert plus["periodic_actions"] is True and plus["response"] == "interpolated"
+    choices = presets.PRESETS["table2+"].choices
+    assert presets.PRESETS["table2+"].task == "four_goals"
+    # The response was chosen on seeds no report uses (the reports run seeds 0-4).
+    assert any("tuning seeds" in choice and "1001-1003" in choice for choice in choices)
 
 
 def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():

@@ -90,3 +90,15 @@ def test_the_reports_count_failed_trials_by_the_one_definition():
     said = beyond._outliers(errors)
     assert "1 of 5 trials failed (above twice the median): trial 4" in said
     assert "no trial failed" in beyond._outliers(np.array([0.010, 0.011, 0.012, 0.013, 0.023]))
+
+
+def test_edge_share_counts_units_within_the_width_of_a_lower_bound():
+    low = np.array([-np.pi, -np.pi])
+    piled = np.column_stack([np.full(4, -np.pi + 0.01), np.linspace(-1, 1, 4)])  # every unit at theta1's edge
+    spread = np.column_stack([np.linspace(-2, 2, 4), [-np.pi + 0.05, 0.0, 1.0, 2.0]])  # one unit at theta2's edge
+    far = np.column_stack([np.full(4, -np.pi + 0.07), np.zeros(4)])  # just outside 0.06 rad
+    np.testing.assert_allclose(metrics.edge_share(np.stack([piled, spread, far]), low), [1.0, 0.25, 0.0])
+    assert metrics.edge_share(far[None], low, width=0.08)[0] == 1.0
+    at_high = -piled  # every unit within 0.01 of +pi in theta1
+    assert metrics.edge_share(at_high[None], low)[0] == 0.0
+    assert metrics.edge_share(at_high[None], low, -low)[0] == 1.0

@@ -123,6 +123,17 @@ def test_merged_seeds_say_in_how_many_seeds_a_claim_holds(tmp_path):
         merge_seeds([parts[0], Section("demo", "Demo")], [0, 1])
 
 
+def test_counts_are_listed_at_every_seed_with_their_sum(tmp_path):
+    parts = [Section("demo", "Demo", claims=[Claim("It works.", "yes", True)], counts={"failed trials": n})
+             for n in (1, 0, 3)]
+    merged = merge_seeds(parts, [4, 5, 6])
+    assert merged.counts == {"failed trials": [1.0, 0.0, 3.0]}
+    text = render([merged], header=[], out_dir=tmp_path, seeds=[4, 5, 6])
+    assert "- failed trials: 1, 0, 3 at seeds 4 to 6, 4 in all" in text
+    alone = render([parts[2]], header=[], out_dir=tmp_path)
+    assert "- failed trials: 3" in alone and "in all" not in alone
+
+
 def test_several_seeds_in_lockstep_equal_single_seed_runs(tmp_path):
     # Seed 1 trained beside seed 0 (one group, one physics call per step) gives the numbers of a
     # reproduction at seed 1 alone. The closed forms keep this test short (test_training checks

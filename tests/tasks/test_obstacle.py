@@ -1,4 +1,5 @@
-"""reach2_obstacle: real contacts, whole episodes through both interfaces, and a trap for distance-greed."""
+"""reach2_obstacle: real contacts, goals behind the wall, whole episodes through both interfaces, and a trap
+for distance-greed."""
 
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ def test_the_batched_task_conforms_and_its_episodes_end_at_different_steps():
     lengths, steps = [], np.zeros(6, dtype=int)
     for _ in range(12):
         observations = task.reset()
-        assert observations.shape == (6, 2) and np.isfinite(observations).all()
+        assert observations.shape == (6, 4) and np.isfinite(observations).all()
         rewards = task.step(_random_actions(task, rng))
         assert rewards.shape == (6,) and (rewards <= -1.0).all()
         steps += 1
@@ -69,10 +70,11 @@ def test_a_finished_trial_restarts_alone_and_trial_i_is_the_same_alone_or_batche
 def test_the_links_never_pass_through_the_wall_in_random_episodes():
     task = tasks.make("reach2_obstacle", step_limit=25)
     rng = np.random.default_rng(2)
-    # Random episodes biased towards the wall (theta1 up), so that the links push into it.
+    # Random episodes biased towards the wall (theta1 turning towards it from either side), so that the
+    # links push into it.
     starts = task.sample_observations(rng, 24)
-    episodes = task.run_episodes(lambda q: np.column_stack([np.full(len(q), 0.4),
-                                                            rng.uniform(-0.4, 0.4, len(q))]),
+    episodes = task.run_episodes(lambda o: np.column_stack([np.where(o[:, 0] < np.pi / 2, 0.4, -0.4),
+                                                            rng.uniform(-0.4, 0.4, len(o))]),
                                  starts, paths=True)
     model = mujoco.MjModel.from_xml_path(str(assets.model_path("arm2_obstacle")))
     data = mujoco.MjData(model)
@@ -95,17 +97,66 @@ def test_the_links_never_pass_through_the_wall_in_random_episodes():
     assert deepest < 0.025
 
 
-def test_distance_greed_gets_stuck_at_the_wall_while_a_4_step_path_exists():
+def test_starts_lie_on_both_sides_clear_of_the_wall_and_every_goal_behind_it():
     task = tasks.make("reach2_obstacle")
-    starts = task.sample_observations(np.random.default_rng(0), 8)
+    episodes = task.sample_observations(np.random.default_rng(4), 400)
+    tips = obstacle.fingertips(episodes[:, :2])
+    left = tips[:, 0] < obstacle.WALL_X
+    assert 0.4 < left.mean() < 0.6  # both sides, even odds
+    assert not obstacle.touches_wall(episodes[:, :2]).any()
+    # The goal lies on the other side of the wall, inside the goal region (its mirror image on the left).
+    assert ((episodes[:, 2] < obstacle.WALL_X) != left).all()
+    right_goals = np.where(left[:, None], episodes[:, 2:], obstacle.mirror_point(episodes[:, 2:]))
+    x0, x1, y0, y1 = obstacle.GOAL_REGION
+    assert ((right_goals[:, 0] >= x0) & (right_goals[:, 0] <= x1)).all()
+    assert ((right_goals[:, 1] >= y0) & (right_goals[:, 1] <= y1)).all()
+    # Starts spread over the rest pose's neighbourhood (or its mirror image), not one pose.
+    right_poses = np.where(left[:, None], obstacle.mirror_pose(episodes[:, :2]), episodes[:, :2])
+    assert np.abs(right_poses - obstacle.REST_POSE).max() > 0.8 * task.params.start_spread
+
+
+def test_the_task_is_mirror_symmetric_about_the_wall():
+    task = tasks.make("reach2_obstacle")
+    start = np.array([[0.7, 1.2, 0.3, 0.66]])
+    mirrored = np.concatenate([obstacle.mirror_pose(start[:, :2]), obstacle.mirror_point(start[:, 2:])], axis=1)
+    moves = iter([np.array([[0.4, 0.4]]), np.array([[0.3, -0.2]])] * 10)
+    flipped = iter([np.array([[-0.4, -0.4]]), np.array([[-0.3, 0.2]])] * 10)
+    one = task.run_episodes(lambda o: next(moves), start, paths=True)
+    other = task.run_episodes(lambda o: next(flipped), mirrored, paths=True)
+    np.testing.assert_allclose(obstacle.mirror_pose(one["path"][0]), other["path"][0], atol=1e-6)
+    np.testing.assert_allclose(one["returns"], other["returns"], atol=1e-6)
+
+
+def test_distance_greed_rarely_reaches_a_goal_that_the_search_reaches_in_a_few_steps():
+    task = tasks.make("reach2_obstacle")
+    starts = task.sample_observations(np.random.default_rng(0), 16)
     greedy = task.run_episodes(obstacle_search.distance_greedy_policy(task), starts)
-    assert not greedy["success"].any() and (greedy["length"] == task.params.step_limit).all()
-    plan = obstacle_search.shortest_path(task, obstacle.REST_POSE, max_depth=4)
-    assert plan is not None and len(plan) == 4
-    assert obstacle_search.shortest_path(task, obstacle.REST_POSE, max_depth=3) is None
-    step = iter(plan)
-    replay = task.run_episodes(lambda q: next(step)[None], obstacle.REST_POSE[None])
-    assert replay["success"][0] and replay["length"][0] == 4
+    assert greedy["success"].mean() <= 2 / 16  # a straight move rarely gets there: the wall is in the way
+    found = obstacle_search.shortest_paths(task, starts)
+    assert found["found"].all() and (found["length"] <= 6).all()
+    # The lengths are the replay's: every plan reaches its goal through run_episodes in that many steps.
+    replay = obstacle_search.replay(task, starts, found["plans"])
+    np.testing.assert_array_equal(replay["length"], found["length"])
+    assert replay["success"].all()
+    assert all(len(plan) == n for plan, n in zip(found["plans"], found["length"], strict=True))
+
+
+def test_no_move_sequence_of_the_grid_is_shorter_than_the_search_where_it_finds_3_steps():
+    # Exhaustive over two steps of the 7 x 7 grid (2,401 sequences, no state merged): none reaches the goal
+    # from a start where the search's shortest path takes 3 steps.
+    task = tasks.make("reach2_obstacle")
+    starts = task.sample_observations(np.random.default_rng(1), 12)
+    found = obstacle_search.shortest_paths(task, starts)
+    three = starts[found["length"] == 3][:2]
+    assert len(three) >= 1
+    grid = obstacle_search.moves(task.params.max_step)
+    for start in three:
+        first, second = np.repeat(grid, len(grid), axis=0), np.tile(grid, (len(grid), 1))
+        q, v = task.advance(np.repeat(start[None, :2], len(first), axis=0), np.zeros((len(first), 2)), first)
+        d1 = task.distances(q, start[2:])
+        q, _ = task.advance(q, v, second)
+        d2 = task.distances(q, start[2:])
+        assert min(d1.min(), d2.min()) >= task.params.tolerance
 
 
 def test_dm_env_episode_equals_trial_0_of_the_batch():
@@ -114,13 +165,16 @@ def test_dm_env_episode_equals_trial_0_of_the_batch():
     rng = np.random.default_rng(3)
     for _ in range(2):  # two episodes: the second start comes from the same stream
         first = env.reset()
-        np.testing.assert_array_equal(first.observation["angles"], batch.reset()[0])
+        start = batch.reset()[0]
+        np.testing.assert_array_equal(first.observation["angles"], start[:2])
+        np.testing.assert_array_equal(first.observation["goal"], start[2:])
+        np.testing.assert_array_equal(env.physics.goal(), start[2:])  # the marker moved to the goal
         while True:
             action = _random_actions(batch, rng)
             reward = batch.step(action)[0]
             step = env.step(action[0])
             assert step.reward == pytest.approx(reward, abs=1e-9)
-            np.testing.assert_allclose(step.observation["angles"], batch.next_observations[0], atol=1e-9)
+            np.testing.assert_allclose(step.observation["angles"], batch.next_observations[0, :2], atol=1e-9)
             if step.last():
                 assert step.discount == (0.0 if batch.terminal[0] else 1.0)
                 assert batch.terminal[0] or batch.truncated[0]
@@ -145,6 +199,7 @@ def test_training_hands_the_learner_next_observations_and_terminal_flags():
 
 @pytest.mark.parametrize("params, match", [
     ({"max_step": 0}, r"max_step must be in \[0.01, 1\]"),
+    ({"start_spread": 0.5}, r"start_spread must be in \[0, 0.3\]"),
     ({"step_limit": 2.5}, r"step_limit must be a whole number in \[1, 1000\]"),
     ({"tolerance": "near"}, "tolerance must be a finite number"),
     ({"wall": 1}, "unknown parameter"),
