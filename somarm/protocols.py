@@ -106,7 +106,6 @@ class EpisodicTask(BatchedTask, Protocol):
     next_observations: np.ndarray  #: (n_trials, obs_dim): where each trial is after the last step
     terminal: np.ndarray  #: (n_trials,) bools: the last step ended the episode (at the goal; a Gymnasium "terminated")
     truncated: np.ndarray  #: (n_trials,) bools: the last step hit the step limit (not terminal)
-    goal: np.ndarray  #: the goal the episodes reach for, e.g. the fingertip's (x, y); empty if none
 
     def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` episode starts drawn with ``rng``, in the form ``run_episodes`` takes (start poses

@@ -213,7 +213,6 @@ class GymTask(TaskBase):
         self.observation_high = np.ones(self.scale_low.size)
         self.action_low, self.action_high = facts["action_low"], facts["action_high"]
         self.max_episode_steps = facts["max_episode_steps"]
-        self.goal = np.zeros(0)  #: a Gymnasium task has no goal position of its own
         self._generators = trial_generators(seed, self.trial_ids, "task")
         self._envs = [params.make_env() for _ in range(self.n_trials)]
         self._eval_envs: list[Any] = []
