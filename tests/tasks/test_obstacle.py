@@ -185,11 +185,12 @@ def test_dm_env_episode_equals_trial_0_of_the_batch():
 
 
 def test_training_hands_the_learner_next_observations_and_terminal_flags():
+    # A small input map, so that 60 steps visit a unit twice and a next state's value is not the initial 0.
     config = runs.RunConfig(task="reach2_obstacle", preset="obstacle", n_steps=60, n_trials=2, block=20,
-                                task_params={"step_limit": 10})
+                            task_params={"step_limit": 10}, overrides={"input_shape": (3, 3)})
     discounted = runs.train(config, progress=False)
-    myopic = runs.train(dataclasses.replace(config, overrides={"gamma": 0.0}),
-                            progress=False)
+    myopic = runs.train(dataclasses.replace(config, overrides={"input_shape": (3, 3), "gamma": 0.0}),
+                        progress=False)
     # Same observations, actions and rewards up to the first learning step; with gamma > 0 the
     # Q-values also hold the next state's value, so they differ.
     assert discounted.learner.t == myopic.learner.t == 60
