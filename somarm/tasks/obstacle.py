@@ -55,7 +55,7 @@ class ObstacleParams:
 
     max_step: float = 0.4  #: largest change of each joint target per step (rad)
     control_interval: float = 0.3  #: seconds the servos track the targets per step (whole 0.01 s)
-    tolerance: float = 0.06  #: the goal is reached when the fingertip is closer than this
+    tolerance: float = 0.08  #: the goal is reached when the fingertip is closer than this
     step_limit: int = 20  #: steps after which an episode is cut off (truncated, not terminal)
     start_spread: float = 0.2  #: start angles are uniform within +- this of the rest pose (rad)
 
@@ -392,7 +392,7 @@ RECORDS = (
         make=lambda params, **kwargs: Obstacle(params, **kwargs),
         environment=lambda batched: (load_physics(), ObstacleEnvTask(batched)),
         preset="obstacle",
-        n_steps=20_000,
+        n_steps=500_000,
         model="arm2_obstacle",
         observation_labels=("theta1 (rad)", "theta2 (rad)", "goal x", "goal y"),
         action_labels=("change of theta1's target (normalised)", "change of theta2's target (normalised)"),

@@ -44,7 +44,8 @@ def test_table2_plus_is_table2_on_circles_with_the_response_chosen_on_tuning_see
 def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
     preset = presets.PRESETS["obstacle"]
     assert preset.task == "reach2_obstacle" and preset.config.gamma == 0.9
-    assert preset.config.input_shape == (12, 12) and preset.config.action_shape == (3, 3)
+    assert preset.config.input_shape == (20, 20) and preset.config.action_shape == (5, 5)
+    assert preset.config.input_init is None and preset.n_steps == 500_000  # the observation bounds; long runs
     assert presets.describe("obstacle").startswith("beyond the paper")
     assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
 

@@ -185,11 +185,12 @@ def test_dm_env_episode_equals_trial_0_of_the_batch():
 
 
 def test_training_hands_the_learner_next_observations_and_terminal_flags():
+    # A small input map, so that 60 steps visit a unit twice and a next state's value is not the initial 0.
     config = runs.RunConfig(task="reach2_obstacle", preset="obstacle", n_steps=60, n_trials=2, block=20,
-                                task_params={"step_limit": 10})
+                            task_params={"step_limit": 10}, overrides={"input_shape": (3, 3)})
     discounted = runs.train(config, progress=False)
-    myopic = runs.train(dataclasses.replace(config, overrides={"gamma": 0.0}),
-                            progress=False)
+    myopic = runs.train(dataclasses.replace(config, overrides={"input_shape": (3, 3), "gamma": 0.0}),
+                        progress=False)
     # Same observations, actions and rewards up to the first learning step; with gamma > 0 the
     # Q-values also hold the next state's value, so they differ.
     assert discounted.learner.t == myopic.learner.t == 60
@@ -219,3 +220,20 @@ def test_bad_backend_and_early_step_are_rejected():
     task.reset()
     with pytest.raises(ValueError, match="must lie inside"):
         task.step(np.full((1, 2), 0.5))
+
+
+def test_the_joint_field_is_zero_at_the_goal_and_walled_off_where_a_link_overlaps_the_wall():
+    goal = np.array([0.32, 0.64])
+    field = obstacle_search.joint_field(goal, 0.08)
+    # A pose whose fingertip is at the goal (elbow out to the left: the mirror of one right of the wall).
+    at_goal = obstacle.mirror_pose(np.array([0.6565, 1.2635]))
+    assert np.linalg.norm(obstacle.fingertips(at_goal) - goal) < 0.04 and field.radians(at_goal) == 0.0
+    inside = np.array([np.pi / 2, 0.0])  # the arm straight up, through the wall
+    assert obstacle.touches_wall(inside) and np.isinf(field.radians(inside))
+    # From the rest pose right of the wall the way round is longer than the straight line in joint space to
+    # the nearest pose at the goal: that line passes through the wall.
+    centres = np.linspace(-np.pi, np.pi, 160, endpoint=False) + np.pi / 160
+    poses = np.stack(np.meshgrid(centres, centres, indexing="ij"), -1)
+    at_the_goal = (np.linalg.norm(obstacle.fingertips(poses) - goal, axis=-1) < 0.08) & ~obstacle.touches_wall(poses)
+    straight = np.abs(poses[at_the_goal] - obstacle.REST_POSE).max(axis=-1).min()
+    assert 1.5 * straight < field.radians(obstacle.REST_POSE) < np.inf
