@@ -99,7 +99,8 @@ class _PathPlayer:
         from somarm.viewer.shows import show_for_task
 
         self.task = task
-        self.show = MotionShow(show_for_task(task_name, task), episode_describer(task))
+        self._goals: dict[int, np.ndarray] = {}  # each episode's goal, from its start observation
+        self.show = MotionShow(show_for_task(task_name, task), episode_describer(task, self._goals.__getitem__))
         self.arm = self.show.arm
 
     def setup(self) -> tuple[list[dict], dict]:
@@ -117,7 +118,7 @@ class _PathPlayer:
         if not self.count(items):
             return []
         finals = np.array([path[-1] for path in items["paths"]])
-        distances = np.asarray(self.task.distances(finals))
+        distances = np.asarray(self.task.distances(finals, self.task.goal_of(np.array(items["observations"]))))
         reached = int(np.sum(distances < self.task.params.tolerance))
         return [f"{reached} of {len(distances)} episodes shown reached the goal"]
 
@@ -127,6 +128,7 @@ class _PathPlayer:
         path = np.array(items["paths"][k])
         observation = np.array(items["observations"][k])
         index, of = int(items.get("indices", [k])[k]), int(items.get("of", self.count(items)))
+        self._goals[index] = self.task.goal_of(observation)
 
         def describe(_k, _n, p, t):
             return self.show.describe(index, of, p, t)

@@ -97,21 +97,22 @@ def motion_animation(show: ArmShow, observations: np.ndarray, paths: list[np.nda
     return overlays.animation_command(frames, fps=_FPS), timeline, objects
 
 
-def episode_describer(task) -> Describe:
+def episode_describer(task, goal_for: Callable[[int], np.ndarray]) -> Describe:
     """Text for a greedy episode of an episodic task: episode and step, return so far, distance, success.
 
     Uses the task's ``control_steps`` (timesteps per step), ``distances``, ``reward_of`` and
-    ``params.tolerance`` / ``params.step_limit``.
+    ``params.tolerance`` / ``params.step_limit``; ``goal_for(k)`` is episode k's goal (x, y).
     """
     per_step = int(task.control_steps)
 
     def describe(k: int, n: int, path: np.ndarray, t: int) -> list[str]:
+        goal = np.asarray(goal_for(k), dtype=np.float64)
         step = int(np.ceil(t / per_step))
         ends = path[[min(j * per_step, len(path) - 1) for j in range(1, step + 1)]]
-        distances = np.asarray(task.distances(ends), dtype=np.float64) if step else np.zeros(0)
+        distances = np.asarray(task.distances(ends, goal), dtype=np.float64) if step else np.zeros(0)
         returned = float(np.sum(task.reward_of(distances))) if step else 0.0
         reached = bool(step and distances[-1] < task.params.tolerance)
-        now = float(np.asarray(task.distances(path[t][None]))[0])
+        now = float(np.asarray(task.distances(path[t][None], goal))[0])
         last = (len(path) - 1) // per_step
         verdict = "goal reached" if reached else ("step limit, goal not reached" if t == len(path) - 1 else "")
         return [f"episode {k + 1} of {n}: step {step} of {last} (limit {task.params.step_limit})",

@@ -158,8 +158,9 @@ def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: i
     ends = 1 + episodes["length"] * task.control_steps
     paths = [episodes["path"][k, :ends[k]] for k in range(len(starts))]
     finals = np.array([path[-1] for path in paths])
-    return Session(task_name, starts, finals, task.distances(finals, task.goal_of(starts)), None,
-                   MotionShow(shows.show_for_task(task_name, task), episode_describer(task)), paths,
+    goals = task.goal_of(starts)
+    return Session(task_name, starts, finals, task.distances(finals, goals), None,
+                   MotionShow(shows.show_for_task(task_name, task), episode_describer(task, lambda k: goals[k])), paths,
                    what="greedy episodes from different starts", **about)
 
 

@@ -37,8 +37,9 @@ def test_every_animation_frame_holds_the_arm_at_mujocos_pose_along_the_path(task
     # Frame k of the first path is the arm at timestep 2k of MuJoCo's trajectory.
     for k in (0, 5, len(frames[0]) - 1):
         expected = _body_position(model, frames[0][k], "link2")
-        assert positions[k]["time"] == k
-        np.testing.assert_allclose(positions[k]["value"], expected, atol=1e-9)
+        # A pose that stays (an arm held against the wall) may keep its key: the key in force at frame k.
+        key = max((p for p in positions if p["time"] <= k), key=lambda p: p["time"])
+        np.testing.assert_allclose(key["value"], expected, atol=1e-9)
     # The paths move: the arm is driven, not set.
     assert np.abs(session.paths[0][-1] - session.paths[0][0]).max() > 0.1
 
