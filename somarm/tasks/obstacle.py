@@ -23,10 +23,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import threading
 from collections import OrderedDict
 
-import mujoco
 import numpy as np
 from dm_control.rl import control
 from dm_env import specs
@@ -35,6 +33,7 @@ from somarm.streams import trial_generators, trial_ids_for
 from somarm.tasks import actuation, arms
 from somarm.tasks.assets import model_path
 from somarm.tasks.base import TaskBase, check_actions
+from somarm.tasks.obstacle_geometry import fingertips, touches_wall
 from somarm.tasks.pool import threads_here
 from somarm.tasks.record import TaskRecord
 
@@ -72,11 +71,6 @@ class ObstacleParams:
             raise ValueError(f"step_limit must be a whole number in [1, 1000], got {self.step_limit!r}")
 
 
-def fingertips(angles: np.ndarray) -> np.ndarray:
-    """Fingertip (x, y) ``(..., 2)`` of joint angles ``(..., 2)``, by MuJoCo (as ``arms.fingertips``)."""
-    return arms.fingertips(angles, 2)
-
-
 def mirror_pose(angles: np.ndarray) -> np.ndarray:
     """The pose mirrored about the wall's line: ``(theta1, theta2) -> (pi - theta1, -theta2)``."""
     angles = np.asarray(angles, dtype=np.float64)
@@ -89,23 +83,6 @@ def mirror_point(points: np.ndarray) -> np.ndarray:
     return np.stack([2 * WALL_X - points[..., 0], points[..., 1]], axis=-1)
 
 
-_collision = threading.local()
-
-
-def touches_wall(angles: np.ndarray) -> np.ndarray:
-    """Whether a link overlaps the wall at rest at joint angles ``(..., 2)``: bools ``(...)``, by MuJoCo."""
-    if not hasattr(_collision, "model"):
-        _collision.model = mujoco.MjModel.from_xml_path(str(model_path("arm2_obstacle")))
-        _collision.data = mujoco.MjData(_collision.model)
-    model, data = _collision.model, _collision.data
-    angles = np.asarray(angles, dtype=np.float64)
-    flat = angles.reshape(-1, 2)
-    out = np.empty(len(flat), dtype=bool)
-    for i, pose in enumerate(flat):
-        data.qpos[:] = pose
-        mujoco.mj_fwdPosition(model, data)
-        out[i] = any(data.contact[k].dist < 0 for k in range(data.ncon))
-    return out.reshape(angles.shape[:-1])
 
 
 class Obstacle(TaskBase):
@@ -217,9 +194,7 @@ class Obstacle(TaskBase):
         """
         if not self._started:
             raise ValueError(f"{self.name}: call reset() before step()")
-        actions = check_actions("actions", actions, self.action_low, self.action_high)
-        if actions.shape != (self.n_trials, 2):
-            raise ValueError(f"actions must have shape ({self.n_trials}, 2), got {actions.shape}")
+        actions = self.batch_actions(actions)
         self._state[:, :2], self._qvel = self.advance(self._state[:, :2], self._qvel, actions)
         self._steps += 1
         distances = self.distances(self._state[:, :2], self._state[:, 2:])

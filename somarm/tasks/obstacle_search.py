@@ -16,7 +16,12 @@ import functools
 
 import numpy as np
 
-from somarm.tasks.obstacle import Obstacle, fingertips, touches_wall
+from somarm.protocols import EpisodicTask
+from somarm.tasks.obstacle_geometry import fingertips, touches_wall
+
+#: The task searched: a ``somarm.tasks.obstacle.Obstacle`` (not imported: the task imports this module
+#: for its shortest paths).
+Obstacle = EpisodicTask
 
 __all__ = ["moves", "JointField", "joint_field", "shortest_paths", "replay", "distance_greedy_policy",
            "random_policy"]
