@@ -142,9 +142,7 @@ class SOMQ:
         if x.ndim != 2 or x.shape[1] != self.task.observation_dim:
             raise ValueError(f"observation must have shape ({self.task.observation_dim},) or "
                              f"(n, {self.task.observation_dim}), got {np.shape(observation)}")
-        scale = getattr(self.task, "scale", None)  # a Gymnasium task scales onto [0, 1]
-        if scale is not None:
-            x = scale(x)
+        x = self.task.scale(x)  # a Gymnasium task maps onto [0, 1]; the others keep their units
         batch = np.broadcast_to(x, (self.config.n_trials, *x.shape))
         actions = np.asarray(self.learner.predict(np.ascontiguousarray(batch)))[trial]
         return (actions[0] if single else actions), None

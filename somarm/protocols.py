@@ -66,6 +66,7 @@ class BatchedTask(Protocol):
     n_trials: int
     t: int  #: steps taken (the learner's t; a task whose goals move reads its phase from it)
     episodic: bool  #: episodes last several steps (an ``EpisodicTask``); False: one step each
+    has_shortest_paths: bool  #: an episodic task that finds each episode's shortest path (``shortest_lengths``)
     #: The joints are driven by servos: an action is a target they track over time (a one-step
     #: actuated task offers ``reached_angles(actions, path=True)``, the joints' path to the reward).
     actuated: bool

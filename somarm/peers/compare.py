@@ -11,6 +11,8 @@ own defaults); TD3 and SAC use SB3's defaults through ``somarm.peers.gym``, with
 
 from __future__ import annotations
 
+import functools
+import json
 import sys
 import time
 from dataclasses import dataclass, field
@@ -144,8 +146,13 @@ def check(config: CompareConfig) -> list[str]:
 
 def _params(config: CompareConfig) -> dict[str, Any]:
     """The task parameters every learner and seed shares: for a ``gym:ID`` task with an unbounded
-    observation Box, its scaling estimated once, from the first seed."""
-    return tasks.record(config.task).complete(tasks.check_params(config.task, config.task_params), config.seed)
+    observation Box, its scaling estimated once, from the first seed (``check`` and ``compare`` share it)."""
+    return json.loads(_completed(config.task, json.dumps(config.task_params, sort_keys=True), config.seed))
+
+
+@functools.lru_cache(maxsize=8)
+def _completed(task: str, params_json: str, seed: int) -> str:
+    return json.dumps(tasks.record(task).complete(tasks.check_params(task, json.loads(params_json)), seed))
 
 
 def _task(config: CompareConfig, seed: int, params: dict[str, Any] | None = None):

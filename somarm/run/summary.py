@@ -48,7 +48,7 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
         }
         if "success_rate" in episodes:  # a task with a goal says whether each episode reached it
             measures["greedy_success_rate"] = float(episodes["success_rate"].mean())
-        if shortest and hasattr(task, "shortest_lengths"):  # a task whose shortest paths can be searched
+        if shortest and task.has_shortest_paths:
             lengths = evaluation.shortest_lengths(task, n_episodes=GREEDY_EPISODES, seed=seed)
             measures["shortest_mean_episode_length"] = float(lengths.mean())
         return measures

@@ -71,6 +71,8 @@ class TaskBase:
     episodic: ClassVar[bool] = False
     #: The joints are servo-driven: an action is a target they track over time.
     actuated: bool = False
+    #: An episodic task that finds the shortest path of an episode by search (``shortest_lengths``).
+    has_shortest_paths: ClassVar[bool] = False
 
     @property
     def observation_dim(self) -> int:
@@ -98,6 +100,11 @@ class TaskBase:
         if actions.shape != (self.n_trials, self.action_dim):
             raise ValueError(f"actions must have shape ({self.n_trials}, {self.action_dim}), got {actions.shape}")
         return actions
+
+    def scale(self, observations: object) -> np.ndarray:
+        """The environment's own observations as the learner sees them: unchanged here (a Gymnasium
+        task maps them onto [0, 1])."""
+        return np.asarray(observations, dtype=np.float64)
 
     def set_step(self, t: int) -> None:
         """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase).

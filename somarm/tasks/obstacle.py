@@ -101,6 +101,7 @@ class Obstacle(TaskBase):
 
     name = "reach2_obstacle"
     episodic = True  #: episodes last several steps: ``step`` sets ``next_observations``/``terminal``
+    has_shortest_paths = True  #: ``shortest_lengths`` searches the action box
     actuated = True  #: the servos track each step's targets for ``control_interval``
 
     def __init__(self, params: ObstacleParams, *, n_trials: int = 1, seed: int = 0,
