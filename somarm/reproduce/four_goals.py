@@ -188,6 +188,9 @@ def four_goals(ctx: Context) -> Section:
     ]
     section.claims.append(_claim(errors))
     section.counts.update(edge_counts(runs["somq"], ctx.seed, ctx.pick(1000, 100)))
+    section.notes.append("Counted below: SOM-Q's trials whose greedy error ends above twice the median, and how many "
+                         "of them failed because their action map piled against the -pi edge of the paper's box of "
+                         "joint angles (90% or more of their units within 0.06 rad of it).")
     section.figures.append(_curves_figure(ctx, runs, switch))
     section.figures += _map_figures(ctx, runs["somq"], switch)
     return section

@@ -110,6 +110,12 @@ def measure(trained: Trained) -> dict:
 
 #: A trial's action map has piled at the edge when at least this share of its units is there.
 _PILED = 0.9
+#: Why a trial fails in the paper's box (the counts below say how often, at every seed).
+_EDGE_NOTE = ("Why trials fail: Table 1's actions are joint angles in the box [-pi, pi]. An action map that forms with "
+              "the shoulder angle at the -pi end, while the goals it serves are reached near +pi (the same pose across "
+              "the box's edge), gets improving perturbations that all point out of the box; the clipped units pile "
+              "against the bound and the map does not recover. The presets beyond the paper treat the angles as "
+              "circles (periodic_actions).")
 
 
 def _edge_text(m: dict) -> str:
@@ -220,6 +226,7 @@ def reach2(ctx: Context) -> Section:
         "the map distance between the greedy action units of neighbouring input units.",
     ]
     section.claims += _claims(m, trained.greedy)
+    section.notes.append(_EDGE_NOTE)
     section.counts.update({"failed trials (final error above twice the median)": m["failed"],
                            f"of them with {100 * _PILED:g}% or more of their action units within "
                            f"{metrics.EDGE_WIDTH} rad of -pi": m["failed at the edge"]})

@@ -13,12 +13,16 @@ class _Trained(Exception):
     """Raised by the stand-in trainer once it has seen what an experiment trains."""
 
 
+#: Every part that trains lockstep groups: the default ones and the optional delayed_reward.
+TRAINED = {**runner.EXPERIMENTS, "delayed_reward": runner.OPTIONAL["delayed_reward"]}
+
+
 def test_every_experiment_of_the_paper_declares_its_groups_and_peers_has_none():
-    assert all(sizes.groups_of(experiment) is not None for experiment in runner.EXPERIMENTS.values())
+    assert all(sizes.groups_of(experiment) is not None for experiment in TRAINED.values())
     assert sizes.groups_of(runner.OPTIONAL["peers"]) is None
 
 
-@pytest.mark.parametrize("name", list(runner.EXPERIMENTS))
+@pytest.mark.parametrize("name", list(TRAINED))
 def test_an_experiment_trains_the_groups_it_declares(name, monkeypatch):
     seen = []
 
@@ -29,8 +33,8 @@ def test_an_experiment_trains_the_groups_it_declares(name, monkeypatch):
     monkeypatch.setattr(common, "train_group", record)
     ctx = Context(out_dir=Path("unused"), quick=True, seed=3, progress=False, seeds=(3, 4))
     with pytest.raises(_Trained):
-        runner.EXPERIMENTS[name](ctx)
-    label, configs = next(iter(sizes.groups_of(runner.EXPERIMENTS[name])(ctx).items()))  # the first group trains first
+        TRAINED[name](ctx)
+    label, configs = next(iter(sizes.groups_of(TRAINED[name])(ctx).items()))  # the first group trains first
     assert seen == [(label, common.at_seeds(ctx, configs))]
 
 
@@ -60,4 +64,4 @@ def test_seeds_that_cannot_fit_are_refused_in_one_line_before_the_report_folder_
 def test_seeds_that_fit_pass_and_the_peers_part_is_not_sized(monkeypatch):
     monkeypatch.setattr(validation, "_available_memory", lambda: 2**30)
     sizes.check_seeds(runner.EXPERIMENTS, quick=True, seed=0, seeds=2, backend="mujoco")
-    sizes.check_seeds(runner.OPTIONAL, quick=False, seed=0, seeds=100_000, backend="mujoco")
+    sizes.check_seeds({"peers": runner.OPTIONAL["peers"]}, quick=False, seed=0, seeds=100_000, backend="mujoco")
