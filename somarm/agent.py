@@ -174,12 +174,30 @@ class SOMQ:
         """Write a run folder (``learner.npz``, ``config.json``, ``curves.npz``, ``summary.json``, figures)
         that ``SOMQ.load``, ``somarm evaluate`` and ``somarm view`` read.
 
+        The folder is claimed as ``somarm train --force`` claims it: locked while the files are written
+        (another process writing there is refused), written beside the earlier results and swapped in
+        only when complete, so a failed save keeps the earlier model whole; files somarm did not write
+        stay.
+
         Raises:
-          ValueError: the folder cannot be written (one line).
+          ValueError: the folder cannot be written, or another process is writing it (one line).
         """
+        from somarm.run.claim import claim
+
         result = self._result()
         extra = run.greedy_summary(result) if result.steps_done else {}
-        return run.write(result, path, extra_summary=extra)
+        owner = claim(Path(path), force=True, flag="path", what="a saved model")
+        try:
+            try:
+                run.write(result, owner.path, extra_summary=extra)
+            except ValueError as exc:
+                owner.finish(False)
+                kept = f"; the earlier model in {owner.folder} is kept" if owner.replacing else ""
+                raise ValueError(f"{exc}{kept}") from None
+            owner.finish(True)
+        finally:
+            owner.release()
+        return owner.folder
 
     @classmethod
     def load(cls, path: str | Path) -> SOMQ:
