@@ -57,7 +57,7 @@ class _GoalPlayer:
     """One-step tasks: the arm (or the throw) for each goal of the cycle."""
 
     def __init__(self, task_name: str, task) -> None:
-        from somarm.viewer.shows import show_for_task
+        from somarm.viewer.task_shows import show_for_task
         from somarm.viewer.throws import ThrowStream
 
         self.task = task
@@ -96,7 +96,7 @@ class _PathPlayer:
 
     def __init__(self, task_name: str, task) -> None:
         from somarm.viewer.motion import MotionShow, episode_describer
-        from somarm.viewer.shows import show_for_task
+        from somarm.viewer.task_shows import show_for_task
 
         self.task = task
         self._goals: dict[int, np.ndarray] = {}  # each episode's goal, from its start observation

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from somarm.streams import trial_generators
-from somarm.viewer import shows
+from somarm.viewer import task_shows
 from somarm.viewer.client import CommandSink
 from somarm.viewer.motion import MotionShow, episode_describer, settle_describer
 from somarm.viewer.shows import arm_animation
@@ -31,7 +31,7 @@ class Session:
       actions: ``(n_goals, action_dim)`` the learner's greedy actions for them.
       errors: ``(n_goals,)`` minus the task's reward for each (the distance missed).
       fan: ``(n_units, action_dim)`` every action unit of the shown trial (the throw fan), or None.
-      show: the task's show (``shows.show_for_task``).
+      show: the task's show (``task_shows.show_for_task``).
       paths: per goal, the joint angles ``(n_frames, nq)`` MuJoCo moved the arm through (actuated
         reach: from the start pose until the reward is read; reach2_obstacle: a whole greedy
         episode), or None where the arm is set, not driven.
@@ -135,11 +135,11 @@ def load_session(task_name: str, *, run: str | Path | None = None, n_goals: int 
     if task.actuated:  # from the start pose (all zeros) to where the reward is read
         moving = task.reached_angles(actions, path=True)
         paths = [np.vstack([np.zeros((1, task.n_links)), path]) for path in moving]
-        arm = shows.show_for_task(task_name, task)
+        arm = task_shows.show_for_task(task_name, task)
         describe = settle_describer(task, observations, errors, float(arm.model.opt.timestep))
         return Session(task_name, observations, actions, errors, None, MotionShow(arm, describe), paths,
                        what="the servos drive the arm to each greedy pose", **about)
-    show = shows.show_for_task(task_name, task, sweep=len(observations) if view == "sweep" else None)
+    show = task_shows.show_for_task(task_name, task, sweep=len(observations) if view == "sweep" else None)
     what = {"sweep": "greedy postures for a sweep of goals (as Fig. 11)",
             "fan": "every action unit thrown at once (the fan)"}.get(view, "greedy answer for each goal")
     if tasks.record(task_name).model == "launcher" and fan is None:
@@ -160,7 +160,7 @@ def _episode_session(task_name: str, task, learner, starts: np.ndarray, trial: i
     finals = np.array([path[-1] for path in paths])
     goals = task.goal_of(starts)
     return Session(task_name, starts, finals, task.distances(finals, goals), None,
-                   MotionShow(shows.show_for_task(task_name, task), episode_describer(task, lambda k: goals[k])), paths,
+                   MotionShow(task_shows.show_for_task(task_name, task), episode_describer(task, lambda k: goals[k])), paths,
                    what="greedy episodes from different starts", **about)
 
 

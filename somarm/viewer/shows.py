@@ -25,12 +25,11 @@ from meshcat.commands import SetTransform
 
 from somarm.tasks.assets import load_model
 from somarm.viewer import framing, overlays
-from somarm.viewer.adapters import goal_adapter
 from somarm.viewer.scene import MujocoScene, path_of
 from somarm.viewer.text import Timeline, css, number, text_command
 
 __all__ = ["ArmShow", "TIP_COLOR", "GOAL_COLOR", "ERROR_COLOR", "INPUT_COLOR", "arm_animation", "hold",
-           "joint_path", "load_model", "shade", "show_for_task"]
+           "joint_path", "load_model", "shade"]
 
 TIP_COLOR, GOAL_COLOR, ERROR_COLOR, INPUT_COLOR = 0xE8A200, 0x1E9E4A, 0xD62828, 0x3060D0
 #: Frames of joint-space interpolation between two goals in the HTML animation, and frames a goal is held.
@@ -293,33 +292,3 @@ def arm_animation(show: ArmShow, observations: np.ndarray, actions: np.ndarray) 
             frames.append(show.frame(observations[following], joint_path(actions[k], actions[following], share)))
         timeline.add(len(moving), [f"moving to goal {following + 1} of {n}", ""])
     return overlays.animation_command(frames, fps=_FPS), timeline
-
-
-def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
-    """What ``somarm view`` and the live view draw for a task.
-
-    Args:
-      task_name: registered task name; its record names the model that draws it.
-      task: the task object (it tells where goals and targets are); None builds a one-trial one.
-      sweep: draw this many postures at once (Fig. 11's sweep, an arm task) instead of one arm.
-
-    Raises:
-      ValueError: unknown task name (the names are listed).
-    """
-    from somarm import tasks
-    from somarm.viewer.postures import SweepShow
-    from somarm.viewer.throws import throw_show
-
-    model_name = tasks.record(task_name).model
-    task = tasks.make(task_name) if task is None else task
-    model = load_model(model_name)
-    if model_name == "launcher":
-        return throw_show(task_name, task, model)
-    if sweep is not None:
-        return SweepShow(model, sweep, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")
-    if task.episodic:  # reach2_obstacle: the arm where it is and the episode's goal, both observed
-        show = ArmShow(model, prefix=f"/meshcat/{task_name}", pose_of=lambda observation, action: np.asarray(
-            observation)[:2])
-        show.goal_of = task.goal_of
-        return show
-    return ArmShow(model, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")

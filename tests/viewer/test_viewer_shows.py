@@ -13,7 +13,8 @@ from somarm.viewer import overlays, shows
 from somarm.viewer.client import Recorder
 from somarm.viewer.feed import own_task
 from somarm.viewer.postures import SweepShow
-from somarm.viewer.shows import ArmShow, arm_animation, load_model, show_for_task
+from somarm.viewer.shows import ArmShow, arm_animation, load_model
+from somarm.viewer.task_shows import show_for_task
 from somarm.viewer.text import Timeline, css, number, text_command
 from somarm.viewer.throws import ThrowShow, ball_color
 
