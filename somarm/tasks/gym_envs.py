@@ -37,7 +37,7 @@ from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
-__all__ = ["PREFIX", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS",
+__all__ = ["PREFIX", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "KNOWN_RANGES",
            "estimate_bounds"]
 
 #: What a Gymnasium task name starts with.
@@ -57,6 +57,15 @@ BENCHMARKS: dict[str, tuple[str, int]] = {
     "Reacher-v5": ("reacher", 200_000),
 }
 _DEFAULT_STEPS = 100_000
+
+#: Observation dimensions whose range the environment itself fixes though its Box is infinite, used
+#: instead of the random-action estimate: InvertedPendulum-v5's cart runs on a rail of [-1, 1] (the
+#: slider joint's range) and an episode ends once the pole leans more than 0.2 rad. Random actions
+#: tip the pole over within a few steps, so they see the cart within about +-0.12 of the middle;
+#: scaled from that, every state of a balancing cart beyond it falls on the input map's edge.
+KNOWN_RANGES: dict[str, dict[int, tuple[float, float]]] = {
+    "InvertedPendulum-v5": {0: (-1.0, 1.0), 1: (-0.2, 0.2)},
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -157,7 +166,8 @@ def _check_bounds(params: GymParams, size: int) -> None:
 def estimate_bounds(params: GymParams, seed: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Scaling bounds where the observation Box is infinite: the 1% and 99% quantiles of
     ``_ESTIMATE_STEPS`` observations under uniformly random actions (episodes reset with seeds of the
-    run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite."""
+    run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite,
+    and the environment's own range where ``KNOWN_RANGES`` gives one."""
     facts = describe(params.env_id, _kwargs_json(params))
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["scaling"],))))
     env = params.make_env()
@@ -177,6 +187,8 @@ def estimate_bounds(params: GymParams, seed: int) -> tuple[tuple[float, ...], tu
     box_low, box_high = facts["observation_low"], facts["observation_high"]
     low = np.where(np.isfinite(box_low), box_low, low_q - margin)
     high = np.where(np.isfinite(box_high), box_high, high_q + margin)
+    for dim, (known_low, known_high) in KNOWN_RANGES.get(params.env_id, {}).items():
+        low[dim], high[dim] = known_low, known_high
     return tuple(float(v) for v in low), tuple(float(v) for v in high)
 
 

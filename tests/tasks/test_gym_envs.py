@@ -126,6 +126,9 @@ def test_observations_are_scaled_from_the_box_or_from_an_estimate_kept_in_config
     config = RunConfig(task="gym:InvertedPendulum-v5", n_steps=200, block=100, seed=4).resolved()
     low, high = np.array(config.task_params["observation_low"]), np.array(config.task_params["observation_high"])
     assert low.shape == (4,) and np.all(high > low) and np.all(np.isfinite([low, high]))
+    # The cart's rail and the pole's ending angle are the environment's own; the velocities are estimated.
+    np.testing.assert_array_equal(low[:2], [-1.0, -0.2])
+    np.testing.assert_array_equal(high[:2], [1.0, 0.2])
     result = run.train(config, progress=False)
     run.write(result, tmp_path / "run", figures=False)
     assert json.loads((tmp_path / "run" / "config.json").read_text())["task_params"]["observation_low"] == list(low)
