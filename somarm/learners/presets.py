@@ -441,7 +441,9 @@ def _benchmarks() -> tuple[Preset, ...]:
          "for 50-step episodes",
          "tuning seed 101, 2 trials: greedy -12.0 after 50,000 steps and -11.9 after 200,000 (random actions "
          "about -43), short of -6: a 20x20 map over 10 observed dimensions (joint angles, target, velocities, "
-         "the fingertip-to-target vector) cannot resolve where the target is finely enough"),
+         "the fingertip-to-target vector) cannot resolve where the target is finely enough",
+         "held out (seeds 0-4, 5 trials x 200,000 steps, 100 greedy episodes per trial): -12.2, -11.7, -11.7, "
+         "-12.6, -11.4, mean -11.9; 150-240 s of training per run of 5 trials on 2 busy cores"),
         n_trials=5, n_steps=200_000)
     return generic, pendulum, mountaincar, invertedpendulum, reacher
 
