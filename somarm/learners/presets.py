@@ -397,7 +397,8 @@ def _benchmarks() -> tuple[Preset, ...]:
          "over the final 20x20 map -533 to -630: the nearest-unit states are too coarse to be Markov, so "
          "sharper backups over them do worse than the online updates; bootstrapping from the blend of the 3 "
          "nearest units' best Q instead of the winner's (this preset, seeds 101-102, 4 trials x 120,000 steps, "
-         "50 greedy episodes each): -275 and -271 against -226 and -241",
+         "50 greedy episodes each): -275 and -271 against -226 and -241; likewise 5 torques -298 and -313, "
+         "gamma 0.99 -244 and -310",
          "where it stops short: value iteration on a fixed 20x20 (angle, velocity) grid with 3 torques reaches "
          "-232, 9 torques -182, 30x30 -155 and 40x40 -147, so the 40x40 map is fine enough; what is left is "
          "learning noise: one trial in five ends 100-250 below the others, and a trial's greedy return swings "
