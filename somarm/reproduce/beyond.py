@@ -4,7 +4,7 @@ Not one of the paper's experiments: its section 6 only suggests "a truly continu
 interpolating over the Q-table". Both responses learn side by side (in lockstep, same
 observations and random numbers) on reach2, reach20, four_goals and throw_distance, under the
 paper's table and, where the targets need it, the table with changed settings (``table1+``: a
-lambda_A floor and periodic joint angles; ``table2+``: periodic joint angles; ``table5+``: schedules),
+lambda_A floor and periodic joint angles; ``table2+``: periodic joint angles and a slower epsilon; ``table5+``: schedules),
 so that the gain of the response and of the settings show apart. Each run counts its failed trials
 (``metrics.failed_trials``). The figures are drawn in ``beyond_figures``.
 """

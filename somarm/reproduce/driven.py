@@ -23,7 +23,7 @@ from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 from somarm.tasks import arms
 
-__all__ = ["PRESET", "RESPONSE", "REPLAY_FACTOR", "ADAPT_FACTOR", "Trained", "groups", "train", "step_times",
+__all__ = ["PRESET", "RESPONSE", "REPLAY_FACTOR", "ADAPT_FACTOR", "TARGET_SCALE", "Trained", "groups", "train", "step_times",
            "measure", "driven_arm"]
 
 plt = pyplot()
@@ -32,7 +32,10 @@ PRESET, RESPONSE = "table1+", "interpolated"  #: the reach2 headline of the beyo
 #: This project's targets: the replayed targets miss by at least REPLAY_FACTOR x the kinematic error, and
 #: the learner of the actuated arm ends within ADAPT_FACTOR x the kinematic learner's error.
 REPLAY_FACTOR, ADAPT_FACTOR = 3.0, 1.5
-_ACTUATED = {"dynamics": "actuated"}
+#: The servo targets' range, in units of pi (``ReachParams.target_scale``): a little beyond the joints' +-pi,
+#: so that a joint can be driven close to its limit within the settle time.
+TARGET_SCALE = 1.15
+_ACTUATED = {"dynamics": "actuated", "target_scale": TARGET_SCALE}
 _GOALS = 1000  #: fresh goals each greedy error averages over (100 when quick)
 _PILED = 0.9  #: a trial's action map has piled at a joint limit when this share of its units is there
 
@@ -198,7 +201,9 @@ def driven_arm(ctx: Context) -> Section:
     section.notes += [
         f"The servos (kp 60, damping 6, armature 0.1 per joint) track the targets for {settle:g} s from the start "
         f"pose (every angle 0) before the reward is read; a joint then covers {fmt(_share_covered(), 2)} of its way "
-        "(the median over uniform targets).",
+        f"(the median over targets uniform in [-pi, pi]). The actuated arm's targets range over +-{TARGET_SCALE:g} pi, "
+        "the joints' own limits staying at +-pi (MuJoCo's soft joint limits let a joint pass pi by a few "
+        "hundredths of a radian).",
         f"Both learners trained in lockstep, {counted(config.n_trials, 'trial')} of {config.n_steps:,} steps each; "
         f"greedy errors on {ctx.pick(_GOALS, 100)} fresh goals per trial, the same goals for all three.",
         f"Wall time per trial-step (reset and step, {config.n_trials} trials): kinematic "
@@ -210,16 +215,22 @@ def driven_arm(ctx: Context) -> Section:
                         "angles are not periodic (a servo target of -pi turns the joint the other way from pi), "
                         "so periodic_actions changes nothing there.",
                         f"Targets: replayed / kinematic >= {REPLAY_FACTOR:g}, actuated / kinematic <= {ADAPT_FACTOR:g}, each a ratio "
-        "of the medians over trials (a typical trial); the failed trials are counted apart. A servo cannot turn a "
-        "joint past its limit (+-pi), so the action units of a trial that forms its map with the elbow on the side "
-        "that needs a target beyond a limit pile against it, as in the paper's box."]
+        "of the medians over trials (a typical trial); the failed trials are counted apart.",
+                        f"target_scale={TARGET_SCALE:g}: the servo targets range over +-{TARGET_SCALE:g} pi, the joints "
+        "over +-pi. A servo covers about 0.92 of its way in the settle time, so a joint angle near pi needs a "
+        "target beyond pi; with targets limited to +-pi the action units of a trial that forms its map with the "
+        "elbow on that side pile against the bound, as in the paper's box. Chosen on tuning seeds no report uses "
+        "(1001-1003, 10 trials x 50,000 steps): actuated / kinematic 1.05-1.12 with targets in +-pi, 1.01-1.11 "
+        "with +-1.15 pi, and trials with 10% or more of their action units within 0.06 rad of the bound 6 of 30 "
+        "against 3 of 30."]
     section.figures.append(_figure(ctx, trained))
     return section
 
 
 def _share_covered() -> float:
-    """The median share of its way from the start pose a joint covers in the settle time (1000 uniform targets)."""
-    task = tasks.make("reach2", **_ACTUATED)
+    """The median share of its way from the start pose a joint covers in the settle time (1000 targets uniform
+    in [-pi, pi])."""
+    task = tasks.make("reach2", dynamics="actuated")
     targets = np.random.default_rng(0).uniform(task.action_low, task.action_high, (1000, 2))
     return float(np.median(task.reached_angles(targets) / targets))
 

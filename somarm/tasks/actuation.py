@@ -35,10 +35,14 @@ class Servos:
     Args:
       name: a model of ``assets.MODEL_NAMES`` with one position actuator per joint.
       n_threads: threads ``mujoco.rollout`` shares a batch between (results do not depend on it).
+      ctrl_limit: the targets' range +-ctrl_limit (radians) instead of the model's ctrlrange; the joints
+        keep their own limits, so a target beyond one drives its joint towards the limit.
     """
 
-    def __init__(self, name: str, *, n_threads: int = 1):
+    def __init__(self, name: str, *, n_threads: int = 1, ctrl_limit: float | None = None):
         self.model = mujoco.MjModel.from_xml_path(str(model_path(name)))
+        if ctrl_limit is not None:
+            self.model.actuator_ctrlrange[:] = (-ctrl_limit, ctrl_limit)
         if self.model.nu != self.model.nq or self.model.nq != self.model.nv:
             raise ValueError(f"model {name} needs one position actuator per hinge")  # pragma: no cover
         self.name = name
@@ -92,12 +96,12 @@ class Servos:
 _local = threading.local()
 
 
-def servos(name: str, n_threads: int = 1) -> Servos:
-    """A cached ``Servos`` of model ``name`` for this thread and thread count."""
+def servos(name: str, n_threads: int = 1, *, ctrl_limit: float | None = None) -> Servos:
+    """A cached ``Servos`` of model ``name`` for this thread, thread count and target range (``Servos``)."""
     cache = getattr(_local, "servos", None)
     if cache is None:
         cache = _local.servos = {}
-    key = (name, int(n_threads))
+    key = (name, int(n_threads), ctrl_limit)
     if key not in cache:
-        cache[key] = Servos(name, n_threads=n_threads)
+        cache[key] = Servos(name, n_threads=n_threads, ctrl_limit=ctrl_limit)
     return cache[key]

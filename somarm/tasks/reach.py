@@ -47,11 +47,16 @@ class ReachParams:
     #: circle is reached with the elbow up by targets 0.39 rad or more inside [-pi, pi]. At 1 s a step of
     #: any size settles within 1e-5.
     settle_time: float = 0.2
+    #: ``actuated`` only: the servo targets range over +-target_scale x pi, while the joints stay limited to
+    #: [-pi, pi]. A servo covers about 0.92 of its way in the default settle time, so a joint angle near a
+    #: limit needs a target beyond it: with targets in [-pi, pi] an action map that forms with the elbow on
+    #: that side piles against the bound. 1 (the default) is the box of the kinematic arm.
+    target_scale: float = 1.0
 
     def __post_init__(self):
         if self.dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {', '.join(DYNAMICS)}, got {self.dynamics!r}")
-        for field in ("centre_x", "centre_y", "radius", "settle_time"):
+        for field in ("centre_x", "centre_y", "radius", "settle_time", "target_scale"):
             value = getattr(self, field)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ValueError(f"{field} must be a finite number, got {value!r}")
@@ -59,6 +64,10 @@ class ReachParams:
             raise ValueError(f"radius must be > 0, got {self.radius!r}")
         if not 0.01 <= self.settle_time <= 100:
             raise ValueError(f"settle_time must be in [0.01, 100] seconds, got {self.settle_time!r}")
+        if not 1 <= self.target_scale <= 2:
+            raise ValueError(f"target_scale must be in [1, 2], got {self.target_scale!r}")
+        if self.target_scale != 1 and self.dynamics != "actuated":
+            raise ValueError("target_scale other than 1 needs dynamics=actuated (kinematic actions are the angles)")
         if not (self.radius <= self.centre_x <= 1 - self.radius and self.radius <= self.centre_y <= 1 - self.radius):
             raise ValueError(f"the goal circle (centre ({self.centre_x}, {self.centre_y}), radius "
                              f"{self.radius}) must lie inside the unit square")
@@ -102,7 +111,8 @@ class Reach(OneStepTask):
         if params.dynamics == "actuated" and kwargs.get("backend") == "analytic":
             raise ValueError("dynamics=actuated needs the mujoco backend (no closed form integrates the servos)")
         self.observation_low, self.observation_high = np.zeros(2), np.ones(2)
-        self.action_low, self.action_high = np.full(n_links, -np.pi), np.full(n_links, np.pi)
+        limit = params.target_scale * np.pi
+        self.action_low, self.action_high = np.full(n_links, -limit), np.full(n_links, limit)
         super().__init__(params, **kwargs)
 
     @property
@@ -133,8 +143,9 @@ class Reach(OneStepTask):
         flat = actions.reshape(-1, self.n_links)
         threads = threads_here(arms.THREADS) if len(flat) > 512 else 1
         start = np.zeros_like(flat)
-        result = actuation.servos(f"arm{self.n_links}", threads).run(start, start, flat, self.settle_steps,
-                                                                     path=path)
+        limit = None if self.params.target_scale == 1 else float(self.action_high[0])
+        servos = actuation.servos(f"arm{self.n_links}", threads, ctrl_limit=limit)
+        result = servos.run(start, start, flat, self.settle_steps, path=path)
         if path:
             return result[0].reshape(*actions.shape[:-1], self.settle_steps, self.n_links)
         return result[0].reshape(actions.shape)
@@ -190,7 +201,10 @@ ARM_ACTION_LABELS = ("theta1 (normalised from [-pi, pi])", "theta2 (normalised)"
 
 
 def _reach_environment(batched: Reach) -> tuple[arms.ArmPhysics, ReachEnvTask]:
-    return arms.load_physics(batched.n_links), ReachEnvTask(batched)
+    physics = arms.load_physics(batched.n_links)
+    if batched.params.target_scale != 1:  # the servos take the task's wider targets (ReachParams.target_scale)
+        physics.model.actuator_ctrlrange[:] = (batched.action_low[0], batched.action_high[0])
+    return physics, ReachEnvTask(batched)
 
 
 def _record(n_links: int, figure: str) -> TaskRecord:
@@ -199,7 +213,7 @@ def _record(n_links: int, figure: str) -> TaskRecord:
         summary=f"{n_links}-link arm reaches a goal on a circle ({figure}); obs goal (x, y), "
                 f"action {n_links} angles",
         params=ReachParams,
-        settable=("centre_x", "centre_y", "radius", "dynamics", "settle_time"),
+        settable=("centre_x", "centre_y", "radius", "dynamics", "settle_time", "target_scale"),
         make=lambda params, **kwargs: Reach(params, n_links=n_links, **kwargs),
         environment=_reach_environment,
         preset="table1",

@@ -31,14 +31,20 @@ def test_plus_presets_change_only_schedules_of_their_table_and_table1_plus_the_c
     assert presets.get("table5+").epsilon.value(10**6) == 0.02
 
 
-def test_table2_plus_is_table2_on_circles_with_the_response_chosen_on_tuning_seeds():
+def test_table2_plus_is_table2_on_circles_with_the_response_and_epsilon_chosen_on_tuning_seeds():
     base, plus = presets.get("table2").to_dict(), presets.get("table2+").to_dict()
-    assert {key for key in base if base[key] != plus[key]} == {"periodic_actions", "response"}
+    assert {key for key in base if base[key] != plus[key]} == {"periodic_actions", "response", "epsilon"}
     assert plus["periodic_actions"] is True and plus["response"] == "interpolated"
+    epsilon, table2 = presets.get("table2+").epsilon, presets.get("table2").epsilon
+    # Larger than Table 2's when the goals move (step 20,000), so an action unit can travel to a quadrant
+    # left without one; the same floor at the end of the run.
+    assert epsilon.value(20_000) == pytest.approx(0.016) and table2.value(20_000) == 0.01
+    assert epsilon.value(40_000) == epsilon.floor == table2.floor == 0.01
     choices = presets.PRESETS["table2+"].choices
     assert presets.PRESETS["table2+"].task == "four_goals"
-    # The response was chosen on seeds no report uses (the reports run seeds 0-4).
+    # The response and epsilon were chosen on seeds no report uses (the reports run seeds 0-4).
     assert any("tuning seeds" in choice and "1001-1003" in choice for choice in choices)
+    assert any(choice.startswith("epsilon = 0.08/(t/5000 + 1)") and "1001-1008" in choice for choice in choices)
 
 
 def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():

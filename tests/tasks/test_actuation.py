@@ -147,3 +147,20 @@ def test_actuated_needs_the_mujoco_backend():
     with pytest.raises(ValueError, match="needs the mujoco backend"):
         tasks.make("reach2", dynamics="actuated", backend="analytic")
     assert reach.DYNAMICS == ("kinematic", "actuated")
+
+
+def test_target_scale_lets_a_servo_bring_its_joint_near_pi_in_the_settle_time():
+    # In 0.2 s a servo covers about 0.92 of its way: a target of pi leaves the joint near 2.9; the wider box
+    # takes a target beyond pi and brings the joint to pi, while the joints' own limits stay at +-pi.
+    narrow = tasks.make("reach2", n_trials=1, dynamics="actuated")
+    wide = tasks.make("reach2", n_trials=1, dynamics="actuated", target_scale=1.15)
+    assert narrow.action_high[0] == pytest.approx(np.pi) and wide.action_high[0] == pytest.approx(1.15 * np.pi)
+    beyond = np.array([[1.1 * np.pi, 0.0]])
+    assert narrow.reached_angles(beyond)[0, 0] < 0.95 * np.pi  # clamped to a target of pi
+    assert 0.99 * np.pi < wide.reached_angles(beyond)[0, 0] < 1.05 * np.pi
+    inside = np.array([[1.0, -2.0]])
+    np.testing.assert_allclose(wide.reached_angles(inside), narrow.reached_angles(inside))
+    with pytest.raises(ValueError, match="target_scale"):
+        tasks.make("reach2", target_scale=1.1)
+    with pytest.raises(ValueError, match="target_scale"):
+        tasks.make("reach2", dynamics="actuated", target_scale=2.5)
