@@ -396,7 +396,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "-255 (200,000); then alpha over 60,000 instead of 20,000 -211 (120,000), over 10,000 -378, over "
          "200,000 -282; 50x50, N_S = 4 -304 (120,000)",
          "held out (seeds 0-4, 5 trials x 120,000 steps, 100 greedy episodes per trial): -223, -256, -246, "
-         "-340, -237, mean -261, short of -200 (the 20x20 map of before: -401 at 60,000 steps); 50-80 s of "
+         "-340, -237, mean -261, short of -200 (a 20x20 map, N_S and alpha over 20,000 steps: -401 at 60,000 steps); 50-80 s of "
          "training per run of 5 trials on 2 busy cores",
          "tried on the 20x20 map (seeds 100-101, 4 trials x 60,000 steps, against -355): 5 torques -697, alpha "
          "decaying to 0 (1/(t/5000 + 1)) -589, no neighbourhood Q-learning -694, gamma 0.99 -498",
