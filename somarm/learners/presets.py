@@ -322,6 +322,9 @@ def _obstacle() -> Preset:
             "(100,000 steps), 1.37 with 20x20 and 9 (150,000), 1.24-1.30 with 20x20 and 25 after 300,000 steps "
             "and 1.24-1.26 after 500,000; with 9 action units the shortest path over a trial's own moves alone "
             "is 1.24 times the shortest over the whole action box",
+            "tried on tuning seed 1001 (3 trials x 300,000 steps; greedy length / shortest): a 7x7 action map "
+            "1.86 (92% success), gamma 0.95 1.34, a p floor of 0.1 1.36, an epsilon floor of 0.02 1.33; none "
+            "beat these settings",
             "N_A = 0: the action units learn apart (moves in opposite directions must not be averaged)",
             "floors keep exploring (p >= 0.2) and learning (alpha >= 0.1) while episodes get shorter",
         ),
