@@ -188,13 +188,7 @@ class SOMQ:
         extra = run.greedy_summary(result) if result.steps_done else {}
         owner = claim(Path(path), force=True, flag="path", what="a saved model")
         try:
-            try:
-                run.write(result, owner.path, extra_summary=extra)
-            except ValueError as exc:
-                owner.finish(False)
-                kept = f"; the earlier model in {owner.folder} is kept" if owner.replacing else ""
-                raise ValueError(f"{exc}{kept}") from None
-            owner.finish(True)
+            run.write_claimed(result, owner, extra_summary=extra)
         finally:
             owner.release()
         return owner.folder

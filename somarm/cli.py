@@ -119,7 +119,7 @@ def _train_into(out: Path, group, args, owner) -> int:
             extra = run.greedy_summary(result)  # the run is written whatever happens here
             if "greedy_error" in extra:
                 print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
-            _write_run(result, owner, figures=not args.no_figures, extra_summary=extra)
+            run.write_claimed(result, owner, figures=not args.no_figures, extra_summary=extra)
     except KeyboardInterrupt:
         if view is not None:
             view.close()
@@ -155,21 +155,6 @@ def _keep_viewing(view) -> None:
         pass
     finally:
         view.close()
-
-
-def _write_run(result, owner, **kwargs) -> None:
-    """Write a run into its claimed folder and make it the folder's run, unless it is incomplete (a
-    failed write, or an interrupted run) and would replace an earlier run, which is then kept whole."""
-    from somarm import run
-
-    try:
-        run.write(result, owner.path, **kwargs)
-    except ValueError as exc:
-        owner.finish(False)
-        if owner.replacing:
-            raise ValueError(f"{exc}; the new run was dropped and the earlier run in {owner.folder} is kept") from None
-        raise
-    owner.finish(not result.interrupted)
 
 
 def _what_was_kept(result, owner, out: Path) -> str:

@@ -15,12 +15,12 @@ from somarm import __version__
 from somarm.io import atomic_save_npz, atomic_write_json
 from somarm.protocols import BatchedTask, Learner
 from somarm.run.build import make_task
-from somarm.run.claim import writer_of
+from somarm.run.claim import FolderClaim, writer_of
 from somarm.run.config import RunConfig
 from somarm.run.group import RunResult
 from somarm.run.summary import summary
 
-__all__ = ["write", "load", "task_for"]
+__all__ = ["write", "write_claimed", "load", "task_for"]
 
 
 def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
@@ -64,6 +64,28 @@ def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
             raise ValueError(f"{exc} ({kept})") from None
         written.append(name)
     return out
+
+
+def write_claimed(result: RunResult, owner: FolderClaim, **kwargs: Any) -> None:
+    """``write`` a run into its claimed folder and make it the folder's run, unless it is incomplete (a
+    failed write, or an interrupted run) and would replace an earlier run, which is then kept whole.
+
+    Args:
+      result: the run.
+      owner: the claim on its folder (``somarm.run.claim.claim``); the caller releases it.
+      **kwargs: ``write``'s (``figures``, ``extra_summary``).
+
+    Raises:
+      ValueError: a file cannot be written (one line; it says where the earlier run is kept).
+    """
+    try:
+        write(result, owner.path, **kwargs)
+    except ValueError as exc:
+        owner.finish(False)
+        if owner.replacing:
+            raise ValueError(f"{exc}; the new run was dropped and the earlier run in {owner.folder} is kept") from None
+        raise
+    owner.finish(not result.interrupted)
 
 
 def _episode_arrays(result: RunResult) -> dict[str, np.ndarray]:
