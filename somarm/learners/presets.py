@@ -332,7 +332,7 @@ def _obstacle() -> Preset:
 
 
 def _benchmark(name: str, env_id: str, changes: dict[str, object], why: tuple[str, ...], *,
-               n_trials: int, n_steps: int) -> Preset:
+               n_trials: int) -> Preset:
     """A preset for a Gymnasium benchmark (``gym:ID``): every value is this project's, chosen on seeds
     100-199, which the reports do not use; the observations arrive scaled to [0, 1] (``tasks.gym_envs``).
 
@@ -341,6 +341,8 @@ def _benchmark(name: str, env_id: str, changes: dict[str, object], why: tuple[st
     (``action_init="grid"``, lambda_A = N_A = 0), the interpolated response, and exploration by
     optimistic initial Q values alone (p = epsilon = 0): each benchmark's ``q_init`` lies above every
     discounted return it can give.
+
+    The run length is the task's (``tasks.gym_envs.BENCHMARKS``), not the preset's: the paper states none.
     """
     slow = InverseDecay(20_000.0)
     config = SOMQConfig(
@@ -360,7 +362,7 @@ def _benchmark(name: str, env_id: str, changes: dict[str, object], why: tuple[st
         action_init="grid",
     )
     return Preset(name, f"beyond the paper: gym:{env_id}, Gymnasium's benchmark", dataclasses.replace(config, **changes),
-                  f"gym:{env_id}", "none (the report's benchmarks part)", n_trials, None, n_steps=n_steps,
+                  f"gym:{env_id}", "none (the report's benchmarks part)", n_trials, None,
                   choices=("every value is this project's: the paper ran no Gymnasium environment; tuned on "
                            "seeds 100-199, reported on seeds 0-4", *why))
 
@@ -383,7 +385,7 @@ def _benchmarks() -> tuple[Preset, ...]:
         ("the generic start for any gym:ID: the benchmarks' input map and gamma 0.98, but since the "
          "reward range of an unknown environment is not known, no optimistic q_init: it explores with "
          "random units (p) and perturbations (epsilon) instead, and 9 action units that learn",),
-        n_trials=5, n_steps=100_000)
+        n_trials=5)
     pendulum = _benchmark(
         "pendulum", "Pendulum-v1",
         {"input_shape": (40, 40), "n_s": Schedule(3.0, InverseDecay(30_000.0)),
@@ -415,7 +417,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "-232, 9 torques -182, 30x30 -155 and 40x40 -147, so the 40x40 map is fine enough; what is left is "
          "learning noise: one trial in five ends 100-250 below the others, and a trial's greedy return swings "
          "by 50-100 between checkpoints"),
-        n_trials=5, n_steps=120_000)
+        n_trials=5)
     mountaincar = _benchmark(
         "mountaincar", "MountainCarContinuous-v0",
         {"gamma": 0.99, "q_init": 100.0, "action_shape": (5,), "lambda_s": Schedule(0.0), "n_s": Schedule(0.0)},
@@ -433,7 +435,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "80.5, 91.4, mean 81.6, short of 90: 2 of 5 seeds meet it, and on seed 1 one trial still has not "
          "found the goal; the winner response instead of the interpolated one, tuning seed 100: 85.5 against "
          "82.8"),
-        n_trials=5, n_steps=200_000)
+        n_trials=5)
     invertedpendulum = _benchmark(
         "invertedpendulum", "InvertedPendulum-v5", {"gamma": 0.99, "q_init": 100.0},
         (*_RECIPE,
@@ -448,7 +450,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "tried (tuning seed 100, 2 trials x 40,000 steps, the environment's ranges, against 170): gamma "
          "0.995 with q_init 200 140, the input map frozen where it starts 135, 5 torques 133, the pendulum "
          "preset's wide Q neighbourhood and slow learning rate 133; 80,000 steps 162"),
-        n_trials=5, n_steps=100_000)
+        n_trials=5)
     reacher = _benchmark(
         "reacher", "Reacher-v5", {"gamma": 0.9, "action_shape": (3, 3)},
         (*_RECIPE,
@@ -459,7 +461,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "the fingertip-to-target vector) cannot resolve where the target is finely enough",
          "held out (seeds 0-4, 5 trials x 200,000 steps, 100 greedy episodes per trial): -12.2, -11.7, -11.7, "
          "-12.6, -11.4, mean -11.9; 150-240 s of training per run of 5 trials on 2 busy cores"),
-        n_trials=5, n_steps=200_000)
+        n_trials=5)
     return generic, pendulum, mountaincar, invertedpendulum, reacher
 
 
