@@ -2,7 +2,6 @@
 
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -50,6 +49,5 @@ def test_saving_into_a_folder_another_process_writes_is_refused_in_one_line(tmp_
     finally:
         holder.kill()
         holder.wait()
-    time.sleep(0.05)
     model.save(folder)  # the kernel freed the lock with the process
     assert (folder / "learner.npz").exists()
