@@ -210,7 +210,7 @@ def _cmd_reproduce(args) -> int:
     out = _out_folder(args.out, "reproduce")
     # An existing report is replaced only with --force (a report of --only parts is not merged
     # into an earlier one: its REPORT.md and claims.json would then mix two runs).
-    owner = claim(out, force=args.force, what="a report")
+    owner = claim(out, force=args.force, resume=args.resume, what="a report")
     sigterm_as_interrupt()
     try:
         status = runner.reproduce(owner.path, quick=args.quick, only=args.only, progress=not args.no_progress,
@@ -252,10 +252,10 @@ def _cmd_compare(args) -> int:
     )
     compare.check(config)
     out = _out_folder(args.out, f"compare/{config.task.replace(':', '-')}")
-    owner = claim(out, force=args.force, what="a comparison")
+    owner = claim(out, force=args.force, resume=args.resume, what="a comparison")
     sigterm_as_interrupt()
     try:
-        compare.compare(config, owner.path, progress=not args.no_progress)
+        compare.compare(config, owner.path, progress=not args.no_progress, resume=args.resume)
         owner.commit()
     except BaseException:
         owner.finish(False)
@@ -313,6 +313,9 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--quick", action="store_true", help="reduced trial counts (a smoke test)")
     reproduce.add_argument("--out", help="output folder (default ./reproduce)")
     reproduce.add_argument("--force", action="store_true", help="replace the report already in --out")
+    reproduce.add_argument("--resume", action="store_true",
+                           help="write over the report in --out in place, keeping the seeds the benchmarks "
+                                "part finished there with the same settings (a long run goes on where it stopped)")
     reproduce.add_argument("--only", nargs="+", metavar="NAME", help="run only these experiments")
     reproduce.add_argument("--no-progress", action="store_true", help="no progress bars")
     reproduce.add_argument("--seeds", type=whole_number, default=1, metavar="N",
@@ -343,6 +346,8 @@ def _parser() -> argparse.ArgumentParser:
     comp.add_argument("--task-set", action="append", metavar="KEY=VALUE", help="change a task parameter")
     comp.add_argument("--out", help="output folder (default compare/TASK)")
     comp.add_argument("--force", action="store_true", help="replace an earlier comparison in --out")
+    comp.add_argument("--resume", action="store_true",
+                      help="go on with the comparison in --out: seeds finished there with the same settings are kept")
     comp.add_argument("--no-progress", action="store_true", help="no progress lines")
     comp.set_defaults(func=_cmd_compare)
 

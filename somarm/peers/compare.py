@@ -303,11 +303,50 @@ def _run_peer(kind: str, config: CompareConfig, seed: int, rungs: list[int], sco
     return values, walls, settings
 
 
-def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[str, Any]:
+def _fingerprint(kind: str, config: CompareConfig, seed: int, rungs: list[int], params: dict[str, Any]) -> dict:
+    """What one learner's training and scores at one seed depend on: a seed's record is reused only
+    where all of it is the same."""
+    if kind in PEERS:
+        import stable_baselines3
+
+        from somarm.peers import zoo
+
+        entry = zoo.zoo_entry(kind, config.task[4:]) if config.task.startswith("gym:") else None
+        settings = {"zoo": entry, "stable_baselines3": stable_baselines3.__version__}
+    else:
+        settings = _our_config(kind, config.task).to_dict()
+    return json.loads(json.dumps({
+        "task": config.task, "task_params": params, "learner": kind, "seed": seed, "rungs": rungs,
+        "episodes": config.episodes, "observations": config.observations, "eval_seed": config.eval_seed,
+        "settings": settings, "somarm_version": __version__}, default=repr))
+
+
+def _earlier_seed(path: Path, fingerprint: dict, progress: bool):
+    """A seed's scores from an earlier run of the same comparison (``path``), or None where there is
+    none, it was made with other settings, or it is damaged (then the seed is trained again)."""
+    if not path.exists():
+        return None
+    try:
+        record = json.loads(path.read_text())
+        found = record["fingerprint"], record["values"], record["walls"], record["settings"]
+    except (OSError, ValueError, KeyError, TypeError):
+        print(f"{path} is damaged; training that seed again", file=sys.stderr, flush=True)
+        return None
+    if found[0] != fingerprint:
+        if progress:
+            print(f"{path} was made with other settings; training that seed again", file=sys.stderr, flush=True)
+        return None
+    return found[1:]
+
+
+def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: bool = False) -> dict[str, Any]:
     """Train every learner on every seed, write ``out/compare.json`` and ``out/compare.png``.
 
     ``compare.json`` is rewritten (atomically) after each learner, so an interruption keeps what
-    finished (``"complete": false``).
+    finished (``"complete": false``). Each learner's scores at each seed are also kept in
+    ``out/seeds/<learner>-<seed>.json`` with everything they depend on; with ``resume`` a seed whose
+    record there matches is read back instead of trained again (a long comparison goes on where it
+    stopped).
 
     Returns:
       The ``compare.json`` content: per learner ``samples`` (the ladder), ``error`` (rung x seed; for a
@@ -330,19 +369,29 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True) -> dict[
         "somarm_version": __version__, "complete": False, "learners": {},
     }
     result.update({"episodes": config.episodes} if score.episodic else {"observations": config.observations})
-    out.mkdir(parents=True, exist_ok=True)
+    (out / "seeds").mkdir(parents=True, exist_ok=True)
     for kind in learners:
         samples = peer_budget(kind, config) if kind in PEERS else config.samples
         rungs = ladder(samples)
         runner = _run_peer if kind in PEERS else _run_ours
         values, walls, settings = [], [], {}
+        warm = False  # the first seed trained in this process warms up (untimed)
         for seed in range(config.seed, config.seed + config.seeds):
-            v, w, settings = runner(kind, config, seed, rungs, score, params, warm_up=seed == config.seed)
+            record = out / "seeds" / f"{kind}-{seed}.json"
+            fingerprint = _fingerprint(kind, config, seed, rungs, params)
+            earlier = _earlier_seed(record, fingerprint, progress) if resume else None
+            if earlier is None:
+                v, w, settings = runner(kind, config, seed, rungs, score, params, warm_up=not warm)
+                warm = True
+                atomic_write_json(record, {"fingerprint": fingerprint, "values": v, "walls": w, "settings": settings})
+            else:
+                v, w, settings = earlier
             values.append(v)
             walls.append(w)
             if progress:
+                again = "" if earlier is None else " (kept from the earlier run)"
                 print(f"{config.task}/{kind} seed {seed}: {samples} samples in {w[-1]:.1f} s, "
-                      f"greedy {score.metric} {v[-1]:.4g}", file=sys.stderr, flush=True)
+                      f"greedy {score.metric} {v[-1]:.4g}{again}", file=sys.stderr, flush=True)
         walls_array = np.array(walls)
         result["learners"][kind] = {
             "samples": rungs,

@@ -1,8 +1,10 @@
 """The benchmarks part: SOM-Q on Gymnasium's classic and MuJoCo environments beside TD3 and SAC
 (``--only benchmarks``).
 
-Not part of the default reproduction: TD3 and SAC train for the RL Baselines3 Zoo's budgets (tens
-of thousands of gradient steps per seed), so the part takes hours on two cores. Every learner runs
+Not part of the default reproduction: TD3 and SAC train for the RL Baselines3 Zoo's budgets (up to
+300,000 gradient steps per seed, at tens of milliseconds each on one core), so the part takes many
+hours. Every seed of every learner is kept as it finishes (``seeds/`` in each comparison's folder):
+``reproduce --only benchmarks --resume`` goes on where a stopped run ended. Every learner runs
 through ``somarm.peers.compare`` on the same seeds, scored by the mean undiscounted return of its
 greedy policy over the same fresh episodes.
 """
@@ -24,9 +26,9 @@ __all__ = ["ENVIRONMENTS", "LEARNERS", "TARGETS", "budgets", "train", "measure",
 #: improving for longer, so it gets more).
 ENVIRONMENTS: dict[str, int] = {
     "Pendulum-v1": 20_000,
-    "MountainCarContinuous-v0": 50_000,
     "InvertedPendulum-v5": 20_000,
     "Reacher-v5": 50_000,
+    "MountainCarContinuous-v0": 50_000,
 }
 LEARNERS = ("somq", "somq+", "motoric", "tabular", "td3", "sac")
 #: Where a fixed grid cannot be built: Reacher-v5's 10 observation dimensions at 16 cells each make
@@ -68,8 +70,9 @@ def train(ctx: Context, seeds: int, episodes: int) -> dict[str, dict]:
             config = compare.CompareConfig(task="gym:" + env_id, learners=learners, samples=ours,
                                            peer_samples=peer_samples, seeds=seeds, seed=ctx.seed,
                                            episodes=episodes, eval_seed=ctx.seed)
+            # A fresh report folder holds no seed records; one given with --resume keeps its finished seeds.
             part = compare.compare(config, ctx.out_dir / "benchmarks" / env_id / "-".join(learners),
-                                   progress=ctx.progress)
+                                   progress=ctx.progress, resume=True)
             merged = {**part, "learners": {**merged.get("learners", {}), **part["learners"]}}
         folder = ctx.out_dir / "benchmarks" / env_id
         atomic_write_json(folder / "compare.json", merged)

@@ -207,8 +207,8 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
     Args:
       folder: the output folder (made, with its parents, if missing).
       force: replace earlier results (at ``commit``, and only the files somarm wrote there).
-      resume: the folder's results are this process's own to go on with (a sweep run again): write
-        in place, neither refused nor staged.
+      resume: the folder's results are this process's own to go on with (a sweep, a comparison or a
+        report run again): write in place, neither refused nor staged, even into a new folder.
       flag: the option that named the folder, for messages.
       what: what the folder holds, for messages (``a run``, ``a report``).
 
@@ -242,7 +242,7 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         _recover(folder)
         existing = sorted(p.name for p in folder.iterdir() if p.name not in _OURS)
-        if existing and resume:
+        if resume:  # in place from the start, so that what a killed run finished is there to go on with
             held._before = frozenset(_files_under(folder))
             return held
         if existing and not force:

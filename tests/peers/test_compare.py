@@ -136,3 +136,38 @@ def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoo
     merged = json.loads((tmp_path / "benchmarks" / "Pendulum-v1" / "compare.json").read_text())
     assert set(merged["learners"]) == set(benchmarks.LEARNERS) and merged["metric"] == "return"
     assert (tmp_path / "benchmarks" / "Pendulum-v1" / "compare.png").stat().st_size > 10_000
+
+
+def test_a_killed_comparison_goes_on_with_resume_keeping_its_finished_seeds(tmp_path, capsys):
+    import subprocess
+
+    from tests.processes import still_running
+
+    out = tmp_path / "cmp"
+    argv = ["compare", "throw_distance", "--learners", "somq,tabular", "--samples", "2000", "--seeds", "3",
+            "--observations", "30", "--out", str(out), "--resume"]
+    proc = subprocess.Popen([sys.executable, "-m", "somarm.cli", *argv, "--no-progress"], stderr=subprocess.PIPE)
+    first = out / "seeds" / "somq-0.json"
+    while proc.poll() is None and not first.exists():
+        still_running([proc.pid], 0.05)
+    proc.kill()
+    proc.wait(timeout=30)
+    assert first.exists(), proc.stderr.read().decode()
+    kept = json.loads(first.read_text())
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "throw_distance/somq seed 0: 2000 samples" in err and "(kept from the earlier run)" in err
+    result = json.loads((out / "compare.json").read_text())
+    assert result["complete"] and np.array(result["learners"]["somq"]["error"]).shape == (5, 3)
+    assert [row[0] for row in result["learners"]["somq"]["error"]] == kept["values"]
+    # Run alone, seed 0 gives the same errors: what was kept is what training gives.
+    alone = compare.compare(compare.CompareConfig(task="throw_distance", learners=("somq",), samples=2000,
+                                                  seeds=1, observations=30), tmp_path / "alone", progress=False)
+    assert [row[0] for row in alone["learners"]["somq"]["error"]] == kept["values"]
+    # A damaged record, and records made with other settings, are trained again, each said in one line.
+    (out / "seeds" / "tabular-2.json").write_text("{")
+    assert main(argv) == 0
+    assert f"{out / 'seeds' / 'tabular-2.json'} is damaged; training that seed again" in capsys.readouterr().err
+    assert main([*argv[:9], "40", *argv[10:]]) == 0
+    assert "was made with other settings; training that seed again" in capsys.readouterr().err
+    assert json.loads((out / "compare.json").read_text())["observations"] == 40
