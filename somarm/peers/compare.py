@@ -92,8 +92,10 @@ def task_defaults(task: str) -> tuple[str, int]:
 
 
 def _our_config(kind: str, task: str):
-    """A somarm learner's config on ``task``: its preset's; ``somq+`` takes the preset's ``+`` table where
-    there is one (``table1+`` for reach2) with the interpolated response."""
+    """A somarm learner's config on ``task``: its preset's. ``somq`` answers with the winning action
+    unit (the paper's response) even where the preset interpolates (the benchmarks' presets), so that
+    its row and SOM-Q+'s differ; ``somq+`` takes the preset's ``+`` table where there is one
+    (``table1+`` for reach2) with the interpolated response."""
     import dataclasses
 
     from somarm.learners import presets
@@ -105,7 +107,8 @@ def _our_config(kind: str, task: str):
     if kind == "somq+":
         plus = preset + "+" if preset + "+" in presets.PRESETS else preset
         return dataclasses.replace(presets.get(plus), response="interpolated")
-    return presets.config_for(kind, preset)
+    config = presets.config_for(kind, preset)
+    return dataclasses.replace(config, response="winner") if kind == "somq" else config
 
 
 def check(config: CompareConfig) -> list[str]:

@@ -171,3 +171,10 @@ def test_a_killed_comparison_goes_on_with_resume_keeping_its_finished_seeds(tmp_
     assert main([*argv[:9], "40", *argv[10:]]) == 0
     assert "was made with other settings; training that seed again" in capsys.readouterr().err
     assert json.loads((out / "compare.json").read_text())["observations"] == 40
+
+
+def test_somq_answers_with_the_winning_unit_and_somq_plus_interpolates_on_a_benchmark_preset():
+    assert compare._our_config("somq", "gym:Pendulum-v1").response == "winner"
+    plus = compare._our_config("somq+", "gym:Pendulum-v1")
+    assert plus.response == "interpolated" and plus.input_shape == compare._our_config("somq", "gym:Pendulum-v1").input_shape
+    assert compare._our_config("somq", "reach2").response == "winner"
