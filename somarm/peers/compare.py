@@ -92,7 +92,8 @@ def task_defaults(task: str) -> tuple[str, int]:
 
 
 def _our_config(kind: str, task: str):
-    """A somarm learner's config on ``task``: its preset's. ``somq`` answers with the winning action
+    """A somarm learner's config on ``task``: its preset's (tabular: its own defaults with the preset's
+    gamma, so that on a ``gym:ID`` task it learns returns, not the next reward). ``somq`` answers with the winning action
     unit (the paper's response) even where the preset interpolates (the benchmarks' presets), so that
     its row and SOM-Q+'s differ; ``somq+`` takes the preset's ``+`` table where there is one
     (``table1+`` for reach2) with the interpolated response."""
@@ -101,9 +102,9 @@ def _our_config(kind: str, task: str):
     from somarm.learners import presets
     from somarm.learners.tabular import TabularConfig
 
-    if kind == "tabular":
-        return TabularConfig()
     preset = task_defaults(task)[0]
+    if kind == "tabular":  # its own exploration; the preset's discount (0 on the paper's one-step tasks)
+        return TabularConfig(gamma=presets.get(preset).gamma)
     if kind == "somq+":
         plus = preset + "+" if preset + "+" in presets.PRESETS else preset
         return dataclasses.replace(presets.get(plus), response="interpolated")

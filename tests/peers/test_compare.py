@@ -178,3 +178,5 @@ def test_somq_answers_with_the_winning_unit_and_somq_plus_interpolates_on_a_benc
     plus = compare._our_config("somq+", "gym:Pendulum-v1")
     assert plus.response == "interpolated" and plus.input_shape == compare._our_config("somq", "gym:Pendulum-v1").input_shape
     assert compare._our_config("somq", "reach2").response == "winner"
+    assert compare._our_config("tabular", "gym:Pendulum-v1").gamma == 0.98  # returns, not the next reward
+    assert compare._our_config("tabular", "reach2").gamma == 0.0
