@@ -19,7 +19,8 @@ from somarm.peers.figure import NAMES, compare_figure
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
-__all__ = ["ENVIRONMENTS", "LEARNERS", "TARGETS", "budgets", "train", "measure", "benchmarks"]
+__all__ = ["ENVIRONMENTS", "LEARNERS", "TARGETS", "budgets", "train", "measure", "benchmarks", "benchmarks_pendulum",
+           "benchmarks_invertedpendulum", "benchmarks_reacher", "benchmarks_mountaincar"]
 
 #: The environments of the part, with this project's budget for TD3 and SAC where the Zoo has none
 #: (SB3's defaults converge on InvertedPendulum within about 20,000 samples; Reacher-v5 keeps
@@ -52,7 +53,7 @@ def budgets(ctx: Context, env_id: str) -> tuple[int, dict[str, int]]:
     return ours, peers
 
 
-def train(ctx: Context, seeds: int, episodes: int) -> dict[str, dict]:
+def train(ctx: Context, seeds: int, episodes: int, envs: tuple[str, ...] = tuple(ENVIRONMENTS)) -> dict[str, dict]:
     """Every learner on every environment through ``compare``: somarm's learners together, TD3 and SAC
     each alone with its own budget (``benchmarks/<env>/<learners>/``), then all of them in
     ``benchmarks/<env>/compare.json`` and ``compare.png``.
@@ -61,7 +62,7 @@ def train(ctx: Context, seeds: int, episodes: int) -> dict[str, dict]:
       KeyboardInterrupt: a comparison was stopped (what finished is written).
     """
     results = {}
-    for env_id in ENVIRONMENTS:
+    for env_id in envs:
         ours, peers = budgets(ctx, env_id)
         merged: dict = {}
         ours_here = tuple(k for k in LEARNERS if k not in compare.PEERS and not (k == "tabular" and env_id in _NO_GRID))
@@ -150,24 +151,28 @@ def _claims(m: dict, seeds: int) -> list[Claim]:
     return claims
 
 
-def _published() -> list[str]:
+def _published(envs: tuple[str, ...]) -> list[str]:
     lines = ["RL Baselines3 Zoo's published results, as published (one trained agent each; mean ± sd of its "
              "evaluation episodes):", ""]
     for (kind, env_id), (mean, sd, steps) in zoo.PUBLISHED.items():
+        if env_id not in envs:
+            continue
         spread = "" if sd is None else f" ± {fmt(sd)}"
         lines.append(f"- {kind.upper()} on {env_id}: {fmt(mean)}{spread} after {fmt(steps)} steps")
     lines += ["", "Gymnasium's reward thresholds: "
-              + ", ".join(f"{env_id} {fmt(v)}" for env_id, v in zoo.THRESHOLDS.items()) + "."]
+              + ", ".join(f"{env_id} {fmt(v)}" for env_id, v in zoo.THRESHOLDS.items() if env_id in envs) + "."]
     return lines
 
 
-def benchmarks(ctx: Context) -> Section:
+def benchmarks(ctx: Context, envs: tuple[str, ...] = tuple(ENVIRONMENTS), name: str = "benchmarks") -> Section:
     """SOM-Q, SOM-Q+, the Motoric Map, tabular Q-learning, TD3 and SAC on Pendulum-v1,
-    MountainCarContinuous-v0, InvertedPendulum-v5 and Reacher-v5: greedy return against samples and
-    wall time, final returns, time to the peers' converged return and to the targets.
+    InvertedPendulum-v5, Reacher-v5 and MountainCarContinuous-v0 (or on ``envs`` alone): greedy return
+    against samples and wall time, final returns, time to the peers' converged return and to the targets.
 
     Args:
       ctx: where and how the part runs (``ctx.quick``: tiny budgets, one seed, few episodes).
+      envs: the environments, from ``ENVIRONMENTS``.
+      name: the part's name in the report.
 
     Returns:
       The report's section.
@@ -176,20 +181,48 @@ def benchmarks(ctx: Context) -> Section:
       KeyboardInterrupt: the training was stopped. ValueError: a figure cannot be written (one line).
     """
     seeds, episodes = ctx.pick(5, 1), ctx.pick(100, 5)
-    results = train(ctx, seeds, episodes)
+    results = train(ctx, seeds, episodes, envs)
     m = measure(results)
-    section = Section("benchmarks", "Benchmarks: SOM-Q on Gymnasium's environments beside TD3 and SAC")
-    section.figures += [ctx.out_dir / "benchmarks" / env_id / "compare.png" for env_id in ENVIRONMENTS]
+    title = "Gymnasium's environments" if len(envs) > 1 else envs[0]
+    section = Section(name, f"Benchmarks: SOM-Q on {title} beside TD3 and SAC")
+    section.figures += [ctx.out_dir / "benchmarks" / env_id / "compare.png" for env_id in envs]
     section.claims += _claims(m, seeds)
-    section.notes += ["", *_table(m), "", *_published()]
+    section.notes += ["", *_table(m), "", *_published(envs)]
+    own_budgets = [f"{fmt(ENVIRONMENTS[e])} on {e}" for e in envs if zoo.zoo_entry("td3", e) is None]
     section.choices += [
         f"Seeds {ctx.seed}..{ctx.seed + seeds - 1} for every learner; the presets were tuned on seeds 100-199.",
         "somarm's learners train for their preset's run length, one trial per seed; TD3 and SAC for the Zoo's "
-        "n_timesteps where the Zoo tunes the environment, else " + ", ".join(
-            f"{fmt(n)} on {e}" for e, n in ENVIRONMENTS.items() if zoo.zoo_entry("td3", e) is None) + ".",
+        "n_timesteps where the Zoo tunes the environment" + (", else " + ", ".join(own_budgets) if own_budgets else "")
+        + ".",
         f"Scores: the mean undiscounted return of the greedy policy over {episodes} fresh episodes (the same reset "
         "seeds for every learner) at the last rung, a fifth of them at the earlier rungs.",
         "The peers' converged return is the lower of TD3's and SAC's final mean returns.",
-        "No tabular learner on Reacher-v5: its 10 observation dimensions at 16 cells each make 16^10 cells.",
+        "SOM-Q answers with the winning action unit (the paper's response), SOM-Q+ with the interpolated one; both "
+        "train with the environment's benchmark preset. The tabular learner takes the preset's gamma.",
     ]
+    if "Reacher-v5" in envs:
+        section.choices.append("No tabular learner on Reacher-v5: its 10 observation dimensions at 16 cells each "
+                               "make 16^10 cells.")
     return section
+
+
+# One environment at a time (``--only benchmarks_pendulum``): the same comparisons, in the same folders, as
+# the whole part's, so that with --resume the seeds one run finished count for the other.
+def benchmarks_pendulum(ctx: Context) -> Section:
+    """The benchmarks part on Pendulum-v1 alone."""
+    return benchmarks(ctx, ("Pendulum-v1",), "benchmarks_pendulum")
+
+
+def benchmarks_invertedpendulum(ctx: Context) -> Section:
+    """The benchmarks part on InvertedPendulum-v5 alone."""
+    return benchmarks(ctx, ("InvertedPendulum-v5",), "benchmarks_invertedpendulum")
+
+
+def benchmarks_reacher(ctx: Context) -> Section:
+    """The benchmarks part on Reacher-v5 alone."""
+    return benchmarks(ctx, ("Reacher-v5",), "benchmarks_reacher")
+
+
+def benchmarks_mountaincar(ctx: Context) -> Section:
+    """The benchmarks part on MountainCarContinuous-v0 alone."""
+    return benchmarks(ctx, ("MountainCarContinuous-v0",), "benchmarks_mountaincar")

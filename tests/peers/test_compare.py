@@ -120,19 +120,19 @@ def test_the_zoos_entries_become_sb3_keywords_and_other_environments_take_sb3s_d
     assert compare.peer_budget("sac", compare.CompareConfig(task="gym:Reacher-v5", samples=777)) == 777
 
 
-def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoos_numbers(tmp_path, monkeypatch):
+def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoos_numbers(tmp_path):
     from somarm.reproduce import benchmarks
 
-    monkeypatch.setattr(benchmarks, "ENVIRONMENTS", {"Pendulum-v1": 20_000})
     assert "benchmarks" not in runner.EXPERIMENTS and runner.check_names(["benchmarks"]) == ["benchmarks"]
-    assert runner.reproduce(tmp_path, quick=True, only=["benchmarks"], progress=False) == 0
-    claims = runner.load_claims(tmp_path)["experiments"]["benchmarks"]["claims"]
+    # One environment alone, in the folders the whole part uses.
+    assert runner.reproduce(tmp_path, quick=True, only=["benchmarks_pendulum"], progress=False) == 0
+    claims = runner.load_claims(tmp_path)["experiments"]["benchmarks_pendulum"]["claims"]
     assert len(claims) == 2 and claims[0]["holds"] is False  # 400 samples do not swing a pendulum up
     report = (tmp_path / "REPORT.md").read_text()
     assert "| environment | learner | final return (mean ± sd) | to the peers' converged return |" in report
     for kind in ("SOM-Q", "SOM-Q+ (interpolated)", "Motoric Map", "tabular (fixed grid)", "SB3 TD3", "SB3 SAC"):
         assert f"| Pendulum-v1 | {kind} | " in report
-    assert "TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in report
+    assert "TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in report and "MountainCarContinuous" not in report
     merged = json.loads((tmp_path / "benchmarks" / "Pendulum-v1" / "compare.json").read_text())
     assert set(merged["learners"]) == set(benchmarks.LEARNERS) and merged["metric"] == "return"
     assert (tmp_path / "benchmarks" / "Pendulum-v1" / "compare.png").stat().st_size > 10_000
