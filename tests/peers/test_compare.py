@@ -141,7 +141,7 @@ def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoo
 def test_a_killed_comparison_goes_on_with_resume_keeping_its_finished_seeds(tmp_path, capsys):
     import subprocess
 
-    from tests.processes import still_running
+    from processes import still_running
 
     out = tmp_path / "cmp"
     argv = ["compare", "throw_distance", "--learners", "somq,tabular", "--samples", "2000", "--seeds", "3",
