@@ -307,22 +307,27 @@ def _run_peer(kind: str, config: CompareConfig, seed: int, rungs: list[int], sco
     return values, walls, settings
 
 
-def _fingerprint(kind: str, config: CompareConfig, seed: int, rungs: list[int], params: dict[str, Any]) -> dict:
-    """What one learner's training and scores at one seed depend on: a seed's record is reused only
-    where all of it is the same."""
+def _learner_settings(kind: str, config: CompareConfig) -> dict[str, Any]:
+    """What a learner's training depends on besides the task and the seed: the Zoo's entry and SB3's
+    version for a peer, the config for somarm's learners."""
     if kind in PEERS:
         import stable_baselines3
 
         from somarm.peers import zoo
 
         entry = zoo.zoo_entry(kind, config.task[4:]) if config.task.startswith("gym:") else None
-        settings = {"zoo": entry, "stable_baselines3": stable_baselines3.__version__}
-    else:
-        settings = _our_config(kind, config.task).to_dict()
+        return {"zoo": entry, "stable_baselines3": stable_baselines3.__version__}
+    return _our_config(kind, config.task).to_dict()
+
+
+def _fingerprint(kind: str, settings: dict[str, Any], config: CompareConfig, seed: int, rungs: list[int],
+                 params: dict[str, Any], score: _Scorer) -> dict:
+    """What one learner's training and scores at one seed depend on: a seed's record is reused only
+    where all of it is the same."""
+    scored = {"episodes": config.episodes} if score.episodic else {"observations": config.observations}
     return json.loads(json.dumps({
-        "task": config.task, "task_params": params, "learner": kind, "seed": seed, "rungs": rungs,
-        "episodes": config.episodes, "observations": config.observations, "eval_seed": config.eval_seed,
-        "settings": settings, "somarm_version": __version__}, default=repr))
+        "task": config.task, "task_params": params, "learner": kind, "seed": seed, "rungs": rungs, **scored,
+        "eval_seed": config.eval_seed, "settings": settings, "somarm_version": __version__}, default=repr))
 
 
 def _earlier_seed(path: Path, fingerprint: dict, progress: bool):
@@ -380,9 +385,10 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
         runner = _run_peer if kind in PEERS else _run_ours
         values, walls, settings = [], [], {}
         warm = False  # the first seed trained in this process warms up (untimed)
+        learner_settings = _learner_settings(kind, config)
         for seed in range(config.seed, config.seed + config.seeds):
             record = out / "seeds" / f"{kind}-{seed}.json"
-            fingerprint = _fingerprint(kind, config, seed, rungs, params)
+            fingerprint = _fingerprint(kind, learner_settings, config, seed, rungs, params, score)
             earlier = _earlier_seed(record, fingerprint, progress) if resume else None
             if earlier is None:
                 v, w, settings = runner(kind, config, seed, rungs, score, params, warm_up=not warm)

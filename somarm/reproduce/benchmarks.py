@@ -19,7 +19,7 @@ from somarm.peers.figure import NAMES, compare_figure
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
-__all__ = ["ENVIRONMENTS", "LEARNERS", "TARGETS", "budgets", "train", "measure", "benchmarks", "benchmarks_pendulum",
+__all__ = ["ENVIRONMENTS", "LEARNERS", "PARTS", "TARGETS", "budgets", "train", "measure", "benchmarks", "benchmarks_pendulum",
            "benchmarks_invertedpendulum", "benchmarks_reacher", "benchmarks_mountaincar"]
 
 #: The environments of the part, with this project's budget for TD3 and SAC where the Zoo has none
@@ -226,3 +226,8 @@ def benchmarks_reacher(ctx: Context) -> Section:
 def benchmarks_mountaincar(ctx: Context) -> Section:
     """The benchmarks part on MountainCarContinuous-v0 alone."""
     return benchmarks(ctx, ("MountainCarContinuous-v0",), "benchmarks_mountaincar")
+
+
+#: The one-environment parts by their ``--only`` names (module-level functions: a worker imports them).
+PARTS = {part.__name__: part for part in (benchmarks_pendulum, benchmarks_invertedpendulum, benchmarks_reacher,
+                                          benchmarks_mountaincar)}

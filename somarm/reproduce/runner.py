@@ -52,8 +52,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
 #: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
 OPTIONAL: dict[str, Callable[[Context], Section]] = {
     "delayed_reward": delayed.delayed_reward, "peers": peers.peers, "benchmarks": benchmarks.benchmarks,
-    **{f"benchmarks_{key}": getattr(benchmarks, f"benchmarks_{key}")
-       for key in ("pendulum", "invertedpendulum", "reacher", "mountaincar")},
+    **benchmarks.PARTS,
 }
 
 
