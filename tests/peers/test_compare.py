@@ -180,3 +180,40 @@ def test_somq_answers_with_the_winning_unit_and_somq_plus_interpolates_on_a_benc
     assert compare._our_config("somq", "reach2").response == "winner"
     assert compare._our_config("tabular", "gym:Pendulum-v1").gamma == 0.98  # returns, not the next reward
     assert compare._our_config("tabular", "reach2").gamma == 0.0
+
+
+def test_the_pendulum_speed_claim_fails_when_som_q_never_reaches_the_target_and_td3_does():
+    from somarm.reproduce import benchmarks
+
+    def measured(somq, somq_plus, td3):
+        finals = {k: (-150.0 if k in ("td3", "sac") else -250.0, 1.0) for k in benchmarks.LEARNERS}
+        to_target = {**{k: None for k in benchmarks.LEARNERS}, "somq": somq, "somq+": somq_plus, "td3": td3}
+        return {"Pendulum-v1": {"final": finals, "random": -1200.0, "converged": -150.0, "to_target": to_target}}
+
+    def speed(m):
+        return benchmarks._claims(m, 5)[-1].holds
+
+    assert speed(measured(None, None, (20_000, 260.0))) is False
+    assert speed(measured(None, None, None)) is None
+    assert speed(measured((100_000, 60.0), (80_000, 40.0), (20_000, 260.0))) is True  # the faster of the two
+    assert speed(measured((100_000, 60.0), None, (20_000, 260.0))) is False
+    claim = benchmarks._claims(measured(None, None, None), 5)[0]
+    assert "-250.0 ± 1.0" in claim.measured and claim.holds is False
+
+
+def test_the_yardsticks_balance_and_reach_and_rounding_them_to_the_presets_grids_costs_what_the_report_says():
+    from somarm.reproduce import yardsticks
+
+    pendulum = dict(yardsticks.inverted_pendulum(2, 0))
+    assert pendulum["linear controller"] == 1000.0  # every step of both episodes balanced
+    assert pendulum["torque rounded to the preset's 3 torques (-3, 0, 3)"] < 200.0
+    assert pendulum["torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])"] > 900.0
+    reacher = dict(yardsticks.reacher(20, 0))
+    assert reacher["PD law"] > -6.0 and reacher["no torque"] < -9.0
+    assert reacher["PD law rounded to the preset's 3x3 grid (-1, 0, 1 per joint)"] < reacher["PD law"] - 2.0
+    lines = yardsticks.table({"Reacher-v5": [("PD law", -5.0)]}, 5)
+    assert "| Reacher-v5 | PD law | -5.0 |" in lines and yardsticks.table({}, 5) == []
+    # Rounding and cell centres are what they say.
+    assert yardsticks.round_to(lambda o: np.array([0.4, -2.0]), np.array([-1.0, 0.0, 1.0]))(None).tolist() == [0.0, -1.0]
+    centred = yardsticks.cell_centre(lambda o: o, np.zeros(2), np.ones(2), 3)
+    assert centred(np.array([0.3, 0.9])).tolist() == [0.5, 1.0]

@@ -1,0 +1,133 @@
+"""Hand-made controllers replayed on the benchmark environments: the yardsticks of the benchmarks part.
+
+SOM-Q's greedy policy is a table: the winning input unit picks one of a fixed grid of torques. A
+controller known to work tells what that form costs, apart from learning. Replay it, then make it
+coarse the way SOM-Q is coarse: round its torque to the preset's grid (the action side), or compute it
+from the centre of a grid cell instead of the observation (the state side, as a nearest-unit lookup
+does). Every number is a mean undiscounted return over fresh episodes of the environment itself.
+
+The controllers are this project's:
+
+- InvertedPendulum-v5: a linear state feedback, ``u = K . obs``, with gains found by a random search
+  over linear policies (they balance all 1,000 steps).
+- Reacher-v5: a Jacobian-transpose PD law on the fingertip-to-target vector of the observation,
+  ``u = kp J(q)^T (target - tip) - kd qdot``, with the arm's link lengths from the model (0.1, 0.11).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "ENVIRONMENTS", "mean_return", "round_to", "cell_centre",
+           "inverted_pendulum", "reacher", "measure", "table"]
+
+Policy = Callable[[np.ndarray], np.ndarray]
+
+#: ``K`` of ``u = K . (cart x, pole angle, cart velocity, pole angular velocity)``.
+INVERTED_PENDULUM_GAINS = np.array([-0.05, 2.82, 1.67, 2.73])
+#: ``(kp, kd)`` of Reacher-v5's PD law.
+REACHER_GAINS = (20.0, 0.1)
+_REACHER_LINKS = (0.1, 0.11)
+
+
+def mean_return(env_id: str, policy: Policy, episodes: int, seed: int) -> float:
+    """The mean undiscounted return of ``policy`` over ``episodes`` episodes reset with seeds
+    ``seed, seed + 1, ...``; actions are clipped to the action box."""
+    import gymnasium
+
+    env = gymnasium.make(env_id)
+    low, high = env.action_space.low, env.action_space.high
+    total = 0.0
+    try:
+        for episode in range(episodes):
+            obs, _ = env.reset(seed=seed + episode)
+            done = False
+            while not done:
+                obs, reward, terminated, truncated, _ = env.step(np.clip(policy(obs), low, high))
+                total += float(reward)
+                done = terminated or truncated
+    finally:
+        env.close()
+    return total / episodes
+
+
+def round_to(policy: Policy, levels: np.ndarray) -> Policy:
+    """``policy`` with each action element rounded to the nearest of ``levels`` (a torque grid)."""
+    levels = np.asarray(levels, dtype=np.float64)
+    return lambda obs: levels[np.argmin(np.abs(levels[None, :] - np.asarray(policy(obs))[:, None]), axis=1)]
+
+
+def cell_centre(policy: Policy, low: np.ndarray, high: np.ndarray, cells: int) -> Policy:
+    """``policy`` answering for the centre of the observation's cell in a grid of ``cells`` per
+    dimension over ``[low, high]`` (a nearest-unit lookup on a uniform map)."""
+    span = np.asarray(high, dtype=np.float64) - low
+
+    def centred(obs: np.ndarray) -> np.ndarray:
+        u = np.clip((obs - low) / span, 0.0, 1.0)
+        return policy(low + span * np.round(u * (cells - 1)) / (cells - 1))
+    return centred
+
+
+def _grid(low: float, high: float, n: int) -> np.ndarray:
+    return np.linspace(low, high, n)
+
+
+def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
+    """The linear controller, its torque rounded to grids, and its state to uniform cells over the
+    benchmark task's scaling (the rail, the ending angle, velocities from random actions)."""
+    from somarm.tasks import gym_envs
+
+    env_id = "InvertedPendulum-v5"
+    linear: Policy = lambda obs: np.array([INVERTED_PENDULUM_GAINS @ obs])
+    low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed))
+    rows = [("linear controller", linear),
+            ("torque rounded to the preset's 3 torques (-3, 0, 3)", round_to(linear, _grid(-3, 3, 3))),
+            ("torque rounded to 5 even torques", round_to(linear, _grid(-3, 3, 5))),
+            ("torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])",
+             round_to(linear, 3 * _grid(-1, 1, 9) ** 3))]
+    rows += [(f"state at the centre of its cell, {k}^4 = {k ** 4:,} cells", cell_centre(linear, low, high, k))
+             for k in (5, 9, 17)]
+    return [(label, mean_return(env_id, policy, episodes, seed)) for label, policy in rows]
+
+
+def _reacher_pd(obs: np.ndarray) -> np.ndarray:
+    c1, c2, s1, s2 = obs[:4]
+    c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
+    l1, l2 = _REACHER_LINKS
+    jacobian = np.array([[-l1 * s1 - l2 * s12, -l2 * s12], [l1 * c1 + l2 * c12, l2 * c12]])
+    kp, kd = REACHER_GAINS
+    return kp * jacobian.T @ -obs[8:10] - kd * obs[6:8]
+
+
+def reacher(episodes: int, seed: int) -> list[tuple[str, float]]:
+    """No torque, the PD law, and the PD law rounded to torque grids."""
+    rows = [("no torque", lambda obs: np.zeros(2)), ("PD law", _reacher_pd),
+            ("PD law rounded to the preset's 3x3 grid (-1, 0, 1 per joint)", round_to(_reacher_pd, _grid(-1, 1, 3))),
+            ("PD law rounded to (-0.1, 0, 0.1) per joint", round_to(_reacher_pd, _grid(-0.1, 0.1, 3)))]
+    return [(label, mean_return("Reacher-v5", policy, episodes, seed)) for label, policy in rows]
+
+
+#: The environments with yardsticks, and how to measure them.
+ENVIRONMENTS: dict[str, Callable[[int, int], list[tuple[str, float]]]] = {
+    "InvertedPendulum-v5": inverted_pendulum,
+    "Reacher-v5": reacher,
+}
+
+
+def measure(envs: tuple[str, ...], episodes: int, seed: int) -> dict[str, list[tuple[str, float]]]:
+    """The yardsticks of those of ``envs`` that have them."""
+    return {env_id: ENVIRONMENTS[env_id](episodes, seed) for env_id in envs if env_id in ENVIRONMENTS}
+
+
+def table(results: dict[str, list[tuple[str, float]]], episodes: int) -> list[str]:
+    """The yardsticks as a Markdown table (no lines when there are none)."""
+    if not results:
+        return []
+    lines = [f"Yardsticks: hand-made controllers replayed, and made coarse the way SOM-Q's table is "
+             f"(mean return over {episodes} fresh episodes; `somarm.reproduce.yardsticks`):", "",
+             "| environment | controller | return |", "|---|---|---|"]
+    for env_id, rows in results.items():
+        lines += [f"| {env_id} | {label} | {value:.1f} |" for label, value in rows]
+    return lines
