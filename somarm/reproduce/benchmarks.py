@@ -16,8 +16,8 @@ import numpy as np
 from somarm.io import atomic_write_json
 from somarm.peers import compare, zoo
 from somarm.peers.figure import NAMES, compare_figure
-from somarm.reproduce.common import Context, fmt
 from somarm.reproduce import yardsticks
+from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
 __all__ = ["ENVIRONMENTS", "LEARNERS", "PARTS", "TARGETS", "budgets", "train", "measure", "benchmarks", "benchmarks_pendulum",

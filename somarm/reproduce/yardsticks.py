@@ -80,7 +80,10 @@ def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
     from somarm.tasks import gym_envs
 
     env_id = "InvertedPendulum-v5"
-    linear: Policy = lambda obs: np.array([INVERTED_PENDULUM_GAINS @ obs])
+
+    def linear(obs: np.ndarray) -> np.ndarray:
+        return np.array([INVERTED_PENDULUM_GAINS @ obs])
+
     low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed))
     rows = [("linear controller", linear),
             ("torque rounded to the preset's 3 torques (-3, 0, 3)", round_to(linear, _grid(-3, 3, 3))),
