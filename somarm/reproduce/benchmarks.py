@@ -23,13 +23,13 @@ from somarm.reproduce.report import Claim, Section
 __all__ = ["ENVIRONMENTS", "LEARNERS", "PARTS", "TARGETS", "budgets", "train", "measure", "benchmarks", "benchmarks_pendulum",
            "benchmarks_invertedpendulum", "benchmarks_reacher", "benchmarks_mountaincar"]
 
-#: The environments of the part, with this project's budget for TD3 and SAC where the Zoo has none
-#: (SB3's defaults converge on InvertedPendulum within about 20,000 samples; Reacher-v5 keeps
-#: improving for longer, so it gets more).
+#: The environments of the part, with this project's budget for TD3 and SAC where the Zoo has none.
+#: At 20,000 samples SB3's default TD3 had not settled on InvertedPendulum-v5: greedy returns of 1000,
+#: 228, 203 and 88 at seeds 0-3, swinging between rungs; Reacher-v5 keeps improving for longer still.
 ENVIRONMENTS: dict[str, int] = {
     "Pendulum-v1": 20_000,
-    "InvertedPendulum-v5": 20_000,
-    "Reacher-v5": 50_000,
+    "InvertedPendulum-v5": 100_000,
+    "Reacher-v5": 200_000,
     "MountainCarContinuous-v0": 50_000,
 }
 LEARNERS = ("somq", "somq+", "motoric", "tabular", "td3", "sac")
