@@ -51,7 +51,7 @@ _QUANTILES = (0.01, 0.99)
 #: The benchmarks with presets of their own (``somarm.learners.presets``) and default steps; any
 #: other id trains with the generic ``gym`` preset for ``_DEFAULT_STEPS`` steps.
 BENCHMARKS: dict[str, tuple[str, int]] = {
-    "Pendulum-v1": ("pendulum", 300_000),
+    "Pendulum-v1": ("pendulum", 500_000),
     "MountainCarContinuous-v0": ("mountaincar", 200_000),
     "InvertedPendulum-v5": ("invertedpendulum", 100_000),
     "Reacher-v5": ("reacher", 200_000),
