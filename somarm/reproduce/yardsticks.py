@@ -70,13 +70,26 @@ def cell_centre(policy: Policy, low: np.ndarray, high: np.ndarray, cells: int) -
     return centred
 
 
-def _grid(low: float, high: float, n: int) -> np.ndarray:
-    return np.linspace(low, high, n)
+def _levels(shape: tuple[int, ...], env_id: str, fraction: float = 1.0) -> np.ndarray:
+    """The torques of each axis of a benchmark preset's frozen grid (``somq.grid_actions``) over the
+    environment's action box, or over ``fraction`` of it round its middle; every axis here has the
+    same range, so one list serves all."""
+    from somarm.learners.somq import grid_actions
+    from somarm.tasks import gym_envs
+
+    facts = gym_envs.describe(env_id)
+    middle, half = (facts["action_high"] + facts["action_low"]) / 2, (facts["action_high"] - facts["action_low"]) / 2
+    return np.unique(grid_actions(shape, middle - fraction * half, middle + fraction * half))
+
+
+def _torques(levels: np.ndarray) -> str:
+    return ", ".join(f"{v:g}" for v in levels)
 
 
 def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
     """The linear controller, its torque rounded to grids, and its state to uniform cells over the
     benchmark task's scaling (the rail, the ending angle, velocities from random actions)."""
+    from somarm.learners import presets
     from somarm.tasks import gym_envs
 
     env_id = "InvertedPendulum-v5"
@@ -85,11 +98,13 @@ def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
         return np.array([INVERTED_PENDULUM_GAINS @ obs])
 
     low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed))
+    preset = _levels(presets.get("invertedpendulum").action_shape, env_id)
+    even = _levels((5,), env_id)
+    packed = np.max(even) * np.linspace(-1.0, 1.0, 9) ** 3
     rows = [("linear controller", linear),
-            ("torque rounded to the preset's 3 torques (-3, 0, 3)", round_to(linear, _grid(-3, 3, 3))),
-            ("torque rounded to 5 even torques", round_to(linear, _grid(-3, 3, 5))),
-            ("torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])",
-             round_to(linear, 3 * _grid(-1, 1, 9) ** 3))]
+            (f"torque rounded to the preset's {preset.size} torques ({_torques(preset)})", round_to(linear, preset)),
+            (f"torque rounded to {even.size} even torques", round_to(linear, even)),
+            ("torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])", round_to(linear, packed))]
     rows += [(f"state at the centre of its cell, {k}^4 = {k ** 4:,} cells", cell_centre(linear, low, high, k))
              for k in (5, 9, 17)]
     return [(label, mean_return(env_id, policy, episodes, seed)) for label, policy in rows]
@@ -106,9 +121,14 @@ def _reacher_pd(obs: np.ndarray) -> np.ndarray:
 
 def reacher(episodes: int, seed: int) -> list[tuple[str, float]]:
     """No torque, the PD law, and the PD law rounded to torque grids."""
+    from somarm.learners import presets
+
+    shape = presets.get("reacher").action_shape
+    preset, small = _levels(shape, "Reacher-v5"), _levels(shape, "Reacher-v5", 0.1)
+    grid = "x".join(str(n) for n in shape)
     rows = [("no torque", lambda obs: np.zeros(2)), ("PD law", _reacher_pd),
-            ("PD law rounded to the preset's 3x3 grid (-1, 0, 1 per joint)", round_to(_reacher_pd, _grid(-1, 1, 3))),
-            ("PD law rounded to (-0.1, 0, 0.1) per joint", round_to(_reacher_pd, _grid(-0.1, 0.1, 3)))]
+            (f"PD law rounded to the preset's {grid} grid ({_torques(preset)} per joint)", round_to(_reacher_pd, preset)),
+            (f"PD law rounded to ({_torques(small)}) per joint", round_to(_reacher_pd, small))]
     return [(label, mean_return("Reacher-v5", policy, episodes, seed)) for label, policy in rows]
 
 
