@@ -169,7 +169,7 @@ class ReferenceSOMQ:
             low, high = np.full_like(low, config.input_init[0]), np.full_like(high, config.input_init[1])
         self.input_weights = low + (high - low) * rng.random((n_s, low.size))
         if config.action_init == "grid":
-            self.action_weights = grid_actions(config.action_shape, self.action_low, self.action_high)
+            self.action_weights = grid_actions(config.action_shape, self.action_low, self.action_high, config.grid_span)
         else:
             span = self.action_high - self.action_low
             self.action_weights = self.action_low + span * rng.random((n_a, self.action_low.size))

@@ -102,6 +102,11 @@ class SOMQConfig(ConfigBase):
     at its grid place spread evenly over the box, the ends on the bounds; needs one grid dimension
     per action dimension)."""
 
+    grid_span: float = 1.0
+    """With ``action_init="grid"``: the fraction of the action box the grid covers, centred on the box's
+    middle, in (0, 1] (1: the ends on the bounds). A narrower grid gives finer torques where balancing
+    and reaching need them; the units still move over the whole box if lambda_A > 0."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -111,10 +116,17 @@ class SOMQConfig(ConfigBase):
         if self.action_init not in ACTION_INITS:
             raise ValueError(f"action_init must be one of {', '.join(ACTION_INITS)}, got {self.action_init!r}")
         object.__setattr__(self, "q_init", check_number("q_init", self.q_init))
+        span = check_number("grid_span", self.grid_span)
+        if not 0.0 < span <= 1.0:
+            raise ValueError(f"grid_span must be in (0, 1], got {span!r}")
+        if span != 1.0 and self.action_init != "grid":
+            raise ValueError(f"grid_span applies only with action_init='grid', got action_init={self.action_init!r}")
+        object.__setattr__(self, "grid_span", span)
 
 
-def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray) -> np.ndarray:
-    """Action weights spread evenly over the box ``[low, high]``: unit i at its grid place, ``(n_units, dim)``.
+def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray, span: float = 1.0) -> np.ndarray:
+    """Action weights spread evenly over the box ``[low, high]``, or over the fraction ``span`` of it
+    round its middle: unit i at its grid place, ``(n_units, dim)``.
 
     A line of n units on one action dimension runs from low to high in n - 1 equal steps; a
     rectangle of rows x cols units covers two action dimensions (rows along the first).
@@ -125,6 +137,8 @@ def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray) -> n
     if len(shape) != low.size:
         raise ValueError(f"action_init=grid needs an action map with one grid dimension per action dimension: "
                          f"action_shape={shape_text(shape)} has {len(shape)}, the action box has {low.size}")
+    middle, half = (np.asarray(high) + low) / 2.0, span * (np.asarray(high) - low) / 2.0
+    low, high = middle - half, middle + half
     axes = [np.linspace(lo, hi, n) if n > 1 else np.array([(lo + hi) / 2.0])
             for n, lo, hi in zip(shape, low, high, strict=True)]
     mesh = np.meshgrid(*axes, indexing="ij")  # row-major, as the map's grid coordinates
@@ -174,7 +188,7 @@ class SOMQ(MapLearner):
         self.action_grid, self._distances_a = self._grid(cfg.action_shape)
         n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
         self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
-        spread = grid_actions(cfg.action_shape, self.action_low, self.action_high) \
+        spread = grid_actions(cfg.action_shape, self.action_low, self.action_high, cfg.grid_span) \
             if cfg.action_init == "grid" else None
         for trial, rng in enumerate(self._initial_generators()):
             # Table 1 order: input weights first, then action weights, from one child stream.

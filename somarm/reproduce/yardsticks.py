@@ -78,8 +78,7 @@ def _levels(shape: tuple[int, ...], env_id: str, fraction: float = 1.0) -> np.nd
     from somarm.tasks import gym_envs
 
     facts = gym_envs.describe(env_id)
-    middle, half = (facts["action_high"] + facts["action_low"]) / 2, (facts["action_high"] - facts["action_low"]) / 2
-    return np.unique(grid_actions(shape, middle - fraction * half, middle + fraction * half))
+    return np.unique(grid_actions(shape, facts["action_low"], facts["action_high"], fraction))
 
 
 def _torques(levels: np.ndarray) -> str:
@@ -98,11 +97,15 @@ def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
         return np.array([INVERTED_PENDULUM_GAINS @ obs])
 
     low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed))
-    preset = _levels(presets.get("invertedpendulum").action_shape, env_id)
+    config = presets.get("invertedpendulum")
+    preset = _levels(config.action_shape, env_id, config.grid_span)
+    narrow = _levels((3,), env_id, 1.0 / 6.0)
     even = _levels((5,), env_id)
     packed = np.max(even) * np.linspace(-1.0, 1.0, 9) ** 3
     rows = [("linear controller", linear),
             (f"torque rounded to the preset's {preset.size} torques ({_torques(preset)})", round_to(linear, preset)),
+            (f"torque rounded to {narrow.size} torques over a sixth of the box ({_torques(narrow)})",
+             round_to(linear, narrow)),
             (f"torque rounded to {even.size} even torques", round_to(linear, even)),
             ("torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])", round_to(linear, packed))]
     rows += [(f"state at the centre of its cell, {k}^4 = {k ** 4:,} cells", cell_centre(linear, low, high, k))
@@ -123,12 +126,14 @@ def reacher(episodes: int, seed: int) -> list[tuple[str, float]]:
     """No torque, the PD law, and the PD law rounded to torque grids."""
     from somarm.learners import presets
 
-    shape = presets.get("reacher").action_shape
-    preset, small = _levels(shape, "Reacher-v5"), _levels(shape, "Reacher-v5", 0.1)
-    grid = "x".join(str(n) for n in shape)
+    config = presets.get("reacher")
+    preset, whole = _levels(config.action_shape, "Reacher-v5", config.grid_span), _levels(config.action_shape, "Reacher-v5")
+    grid = "x".join(str(n) for n in config.action_shape)
     rows = [("no torque", lambda obs: np.zeros(2)), ("PD law", _reacher_pd),
-            (f"PD law rounded to the preset's {grid} grid ({_torques(preset)} per joint)", round_to(_reacher_pd, preset)),
-            (f"PD law rounded to ({_torques(small)}) per joint", round_to(_reacher_pd, small))]
+            (f"PD law rounded to the preset's {grid} grid ({_torques(preset)} per joint)", round_to(_reacher_pd, preset))]
+    if not np.array_equal(preset, whole):
+        rows.append((f"PD law rounded to a {grid} grid over the whole box ({_torques(whole)} per joint)",
+                     round_to(_reacher_pd, whole)))
     return [(label, mean_return("Reacher-v5", policy, episodes, seed)) for label, policy in rows]
 
 

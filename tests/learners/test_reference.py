@@ -117,3 +117,14 @@ def test_optimistic_start_and_grid_actions_equal_reference_exactly(response):
         np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
         np.testing.assert_array_equal(batched.q[i], ref.q)
     assert batched.q.min() < 1.0  # the optimistic values were learned down
+
+
+def test_a_grid_over_part_of_the_box_equals_reference_exactly():
+    bounds = dict(BOUNDS, action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
+    config = dataclasses.replace(_config((3, 2), True, 0.9), action_shape=(3, 3), action_init="grid",
+                                 grid_span=0.5, q_init=2.0)
+    np.testing.assert_allclose(SOMQ(config, seed=1, **bounds).action_weights[0, [0, 8]], [[-0.5, 0.25], [0.5, 0.75]])
+    batched, references = _run_both(config, bounds=bounds, n_steps=100)
+    for i, ref in enumerate(references):
+        np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)
+        np.testing.assert_array_equal(batched.q[i], ref.q)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQ, SOMQConfig, grid_actions
 from somarm.protocols import Learner
 
 BOX1 = dict(observation_low=[0.0], observation_high=[3.0], action_low=[0.0, 0.0], action_high=[1.0, 1.0])
@@ -267,6 +267,9 @@ def test_bad_overrides_one_clear_line(overrides, match):
         (lambda: SOMQConfig(action_init="even"), "action_init must be one of random, grid, got 'even'"),
         (lambda: SOMQ(SOMQConfig(action_shape=(9,), action_init="grid"), **BOX2),
          "action_init=grid needs an action map with one grid dimension per action dimension: action_shape=9 has 1"),
+        (lambda: SOMQConfig(action_init="grid", grid_span=0.0), "grid_span must be in \\(0, 1\\], got 0.0"),
+        (lambda: SOMQConfig(action_init="grid", grid_span=1.5), "grid_span must be in \\(0, 1\\], got 1.5"),
+        (lambda: SOMQConfig(grid_span=0.5), "grid_span applies only with action_init='grid'"),
     ],
 )
 def test_bad_construction(make, match):
@@ -338,6 +341,18 @@ def test_relative_epsilon_scales_with_each_action_range():
     assert steps[1][:, 0].max() <= 0.01 and steps[1][:, 1].max() <= 2.0 and steps[1][:, 1].max() > 1.8
     np.testing.assert_allclose(steps[1][:, 1], 200 * steps[0][:, 1], rtol=1e-12)  # same draws, scaled
     assert SOMQConfig().with_overrides({"epsilon_relative": "true"}).epsilon_relative
+
+
+def test_grid_span_spreads_the_grid_over_a_middle_part_of_the_action_box():
+    # A 5-unit line over a fifth of [-3, 3] runs from -0.6 to 0.6; a 3 x 3 rectangle over a tenth of
+    # [-1, 1] x [0, 1] is centred on (0, 0.5); span 1 is the whole box.
+    box = dict(observation_low=[0.0], observation_high=[1.0], action_low=[-3.0], action_high=[3.0])
+    narrow = SOMQ(SOMQConfig(input_shape=(2,), action_shape=(5,), action_init="grid", grid_span=0.2), **box)
+    np.testing.assert_allclose(narrow.action_weights[0, :, 0], [-0.6, -0.3, 0.0, 0.3, 0.6])
+    square = grid_actions((3, 3), np.array([-1.0, 0.0]), np.array([1.0, 1.0]), 0.1)
+    np.testing.assert_allclose(square[[0, 4, 8]], [[-0.1, 0.45], [0.0, 0.5], [0.1, 0.55]])
+    np.testing.assert_allclose(grid_actions((3,), np.array([-1.0]), np.array([1.0])).ravel(), [-1.0, 0.0, 1.0])
+    assert SOMQConfig(action_init="grid").with_overrides({"grid_span": "0.25"}).grid_span == 0.25
 
 
 def test_optimistic_q_init_makes_the_greedy_policy_try_every_action_unit():
