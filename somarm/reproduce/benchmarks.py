@@ -199,7 +199,8 @@ def benchmarks(ctx: Context, envs: tuple[str, ...] = tuple(ENVIRONMENTS), name: 
     section.notes += ["", *_table(m), "", *_published(envs)]
     # Where SOM-Q stops short: what a table of fixed torques costs a controller known to work.
     yard_episodes = ctx.pick(100, 2)
-    section.notes += ["", *yardsticks.table(yardsticks.measure(envs, yard_episodes, ctx.seed), yard_episodes)]
+    section.notes += ["", *yardsticks.table(
+        yardsticks.measure(envs, yard_episodes, ctx.seed, ctx.pick(None, 500)), yard_episodes)]
     own_budgets = [f"{fmt(ENVIRONMENTS[e])} on {e}" for e in envs if zoo.zoo_entry("td3", e) is None]
     section.choices += [
         f"Seeds {ctx.seed}..{ctx.seed + seeds - 1} for every learner; the presets were tuned on seeds 100-199.",

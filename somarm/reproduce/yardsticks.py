@@ -4,7 +4,8 @@ SOM-Q's greedy policy is a table: the winning input unit picks one of a fixed gr
 controller known to work tells what that form costs, apart from learning. Replay it, then make it
 coarse the way SOM-Q is coarse: round its torque to the preset's grid (the action side), or compute it
 from the centre of a grid cell instead of the observation (the state side, as a nearest-unit lookup
-does). Every number is a mean undiscounted return over fresh episodes of the environment itself.
+does), or from the input units SOM-Q itself learned: the nearest one, as the paper's winner response
+sees the state, or a blend over the nearest few, as the interpolated response does. Every number is a mean undiscounted return over fresh episodes of the environment itself.
 
 The controllers are this project's:
 
@@ -21,7 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 __all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "ENVIRONMENTS", "mean_return", "round_to", "cell_centre",
-           "inverted_pendulum", "reacher", "measure", "table"]
+           "learned_map", "through_map", "inverted_pendulum", "reacher", "measure", "table"]
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
@@ -70,6 +71,62 @@ def cell_centre(policy: Policy, low: np.ndarray, high: np.ndarray, cells: int) -
     return centred
 
 
+def learned_map(env_id: str, steps: int, seed: int):
+    """The input map SOM-Q learns on ``env_id`` with the environment's benchmark preset: one trial of
+    ``steps`` steps at ``seed``; returns the task (its observation scaling) and the units ``(n, obs_dim)``."""
+    from somarm.agent import SOMQ
+
+    model = SOMQ(env_id, seed=seed, n_trials=1)
+    model.learn(steps)
+    return model.task, model.learner.input_weights[0].copy()
+
+
+def through_map(policy: Policy, task, units: np.ndarray, n_basis: int = 1) -> Policy:
+    """``policy`` answering for the input units nearest the observation instead of the observation.
+
+    With ``n_basis = 1`` the nearest unit's place alone (the winner response's view of the state);
+    with more, a blend of the policy at the ``n_basis`` nearest units with the interpolated
+    response's tapered inverse-distance weights ``1/d_i - 1/d_(n_basis+1)``
+    (``somarm.learners.interpolation``), so the blend moves continuously between units.
+    """
+    def seen(obs: np.ndarray) -> np.ndarray:
+        distances = np.sqrt(((units - task.scale(obs)) ** 2).sum(axis=1))
+        order = np.argsort(distances, kind="stable")[: n_basis + 1]
+        if n_basis == 1 or distances[order[0]] == 0.0:
+            return policy(task.unscale(units[order[0]]))
+        weights = 1.0 / distances[order[:n_basis]] - 1.0 / distances[order[n_basis]]
+        answers = np.array([policy(task.unscale(units[i])) for i in order[:n_basis]])
+        return weights @ answers / weights.sum()
+    return seen
+
+
+def _map_rows(env_id: str, policy: Policy, map_steps: int | None, seed: int,
+              roundings: tuple[tuple[str, np.ndarray], ...] = ()) -> list[tuple[str, Policy]]:
+    """The policy seen through the preset's learned input map (after ``map_steps`` steps, None: the
+    benchmark's own, 0: no rows): by its nearest unit, blended, and blended with each unit's action
+    rounded to each of ``roundings`` (label, levels) first: the interpolated response's form when
+    every unit holds one torque of a grid."""
+    from somarm.learners import presets
+    from somarm.learners.interpolation import n_basis_for
+    from somarm.tasks import gym_envs
+
+    preset, steps = gym_envs.BENCHMARKS[env_id]
+    map_steps = steps if map_steps is None else map_steps
+    if map_steps <= 0:
+        return []
+    config = presets.get(preset)
+    task, units = learned_map(env_id, map_steps, seed)
+    shape = "x".join(str(n) for n in config.input_shape)
+    n_basis = n_basis_for(config.input_shape)
+    where = f"the preset's {shape} input map after {map_steps:,} steps"
+    blended = f"state seen through {where}: blended over its {n_basis} nearest units"
+    return [(f"state seen through {where}: its nearest unit", through_map(policy, task, units)),
+            (blended, through_map(policy, task, units, n_basis))] + [
+            (f"{blended}, each unit's torque rounded to {label}", through_map(round_to(policy, levels), task, units,
+                                                                               n_basis))
+            for label, levels in roundings]
+
+
 def _levels(shape: tuple[int, ...], env_id: str, fraction: float = 1.0) -> np.ndarray:
     """The torques of each axis of a benchmark preset's frozen grid (``somq.grid_actions``) over the
     environment's action box, or over ``fraction`` of it round its middle; every axis here has the
@@ -85,9 +142,11 @@ def _torques(levels: np.ndarray) -> str:
     return ", ".join(f"{v:g}" for v in levels)
 
 
-def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
-    """The linear controller, its torque rounded to grids, and its state to uniform cells over the
-    benchmark task's scaling (the rail, the ending angle, velocities from random actions)."""
+def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[str, float]]:
+    """The linear controller, its torque rounded to grids, its state to uniform cells over the
+    benchmark task's scaling (the rail, the ending angle, velocities from random actions), and (with
+    ``map_steps``) its state seen through the input map SOM-Q learns in that many steps (None: the
+    benchmark's own)."""
     from somarm.learners import presets
     from somarm.tasks import gym_envs
 
@@ -110,6 +169,10 @@ def inverted_pendulum(episodes: int, seed: int) -> list[tuple[str, float]]:
             ("torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])", round_to(linear, packed))]
     rows += [(f"state at the centre of its cell, {k}^4 = {k ** 4:,} cells", cell_centre(linear, low, high, k))
              for k in (5, 9, 17)]
+    fine = np.linspace(-1.0, 1.0, 21)
+    rows += _map_rows(env_id, linear, map_steps, seed,
+                      ((f"the preset's {preset.size}", preset), (f"{narrow.size} over a sixth of the box", narrow),
+                       (f"{fine.size} even in [-1, 1]", fine)))
     return [(label, mean_return(env_id, policy, episodes, seed)) for label, policy in rows]
 
 
@@ -122,8 +185,9 @@ def _reacher_pd(obs: np.ndarray) -> np.ndarray:
     return kp * jacobian.T @ -obs[8:10] - kd * obs[6:8]
 
 
-def reacher(episodes: int, seed: int) -> list[tuple[str, float]]:
-    """No torque, the PD law, and the PD law rounded to torque grids."""
+def reacher(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[str, float]]:
+    """No torque, the PD law, the PD law rounded to torque grids, and (with ``map_steps``) its state
+    seen through the input map SOM-Q learns in that many steps."""
     from somarm.learners import presets
 
     config = presets.get("reacher")
@@ -134,19 +198,22 @@ def reacher(episodes: int, seed: int) -> list[tuple[str, float]]:
     if not np.array_equal(preset, whole):
         rows.append((f"PD law rounded to a {grid} grid over the whole box ({_torques(whole)} per joint)",
                      round_to(_reacher_pd, whole)))
+    rows += _map_rows("Reacher-v5", _reacher_pd, map_steps, seed)
     return [(label, mean_return("Reacher-v5", policy, episodes, seed)) for label, policy in rows]
 
 
 #: The environments with yardsticks, and how to measure them.
-ENVIRONMENTS: dict[str, Callable[[int, int], list[tuple[str, float]]]] = {
+ENVIRONMENTS: dict[str, Callable[[int, int, int | None], list[tuple[str, float]]]] = {
     "InvertedPendulum-v5": inverted_pendulum,
     "Reacher-v5": reacher,
 }
 
 
-def measure(envs: tuple[str, ...], episodes: int, seed: int) -> dict[str, list[tuple[str, float]]]:
-    """The yardsticks of those of ``envs`` that have them."""
-    return {env_id: ENVIRONMENTS[env_id](episodes, seed) for env_id in envs if env_id in ENVIRONMENTS}
+def measure(envs: tuple[str, ...], episodes: int, seed: int,
+            map_steps: int | None = 0) -> dict[str, list[tuple[str, float]]]:
+    """The yardsticks of those of ``envs`` that have them, with the input maps SOM-Q learns in
+    ``map_steps`` steps (None: each benchmark's own steps; 0: none)."""
+    return {env_id: ENVIRONMENTS[env_id](episodes, seed, map_steps) for env_id in envs if env_id in ENVIRONMENTS}
 
 
 def table(results: dict[str, list[tuple[str, float]]], episodes: int) -> list[str]:

@@ -78,7 +78,8 @@ def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
     assert np.all(torques != 0) and np.min(np.abs(torques)) <= 0.5
     # MountainCar's input map stays at its uniform start: one settling on the valley leaves the hills coarse
     assert presets.get("mountaincar").lambda_s.value(0) == 0 and presets.get("mountaincar").n_s.value(0) == 0
-    assert presets.get("reacher").action_shape == (3, 3)
+    # Reacher: a 3x3 grid over a tenth of the torque box, fine pushes to hold the fingertip on the target
+    assert presets.get("reacher").action_shape == (3, 3) and presets.get("reacher").grid_span == 0.1
     # the generic preset cannot know a reward range, so it explores with random units and perturbations
     generic = presets.get("gym")
     assert generic.q_init == 0.0 and generic.p.value(10**6) > 0 and generic.epsilon.value(10**6) > 0

@@ -210,10 +210,41 @@ def test_the_yardsticks_balance_and_reach_and_rounding_them_to_the_presets_grids
     assert pendulum["torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])"] > 900.0
     reacher = dict(yardsticks.reacher(20, 0))
     assert reacher["PD law"] > -6.0 and reacher["no torque"] < -9.0
-    assert reacher["PD law rounded to the preset's 3x3 grid (-1, 0, 1 per joint)"] < reacher["PD law"] - 2.0
+    assert reacher["PD law rounded to a 3x3 grid over the whole box (-1, 0, 1 per joint)"] < reacher["PD law"] - 2.0
+    assert reacher["PD law rounded to the preset's 3x3 grid (-0.1, 0, 0.1 per joint)"] > reacher["PD law"] - 1.0
+    assert pendulum["torque rounded to 3 torques over a sixth of the box (-0.5, 0, 0.5)"] > 500.0
     lines = yardsticks.table({"Reacher-v5": [("PD law", -5.0)]}, 5)
     assert "| Reacher-v5 | PD law | -5.0 |" in lines and yardsticks.table({}, 5) == []
     # Rounding and cell centres are what they say.
     assert yardsticks.round_to(lambda o: np.array([0.4, -2.0]), np.array([-1.0, 0.0, 1.0]))(None).tolist() == [0.0, -1.0]
     centred = yardsticks.cell_centre(lambda o: o, np.zeros(2), np.ones(2), 3)
     assert centred(np.array([0.3, 0.9])).tolist() == [0.5, 1.0]
+
+
+def test_a_policy_seen_through_an_input_map_answers_for_its_nearest_units():
+    from somarm.reproduce import yardsticks
+
+    class Doubling:  # a task whose scaled observation is half the environment's
+        scale = staticmethod(lambda obs: np.asarray(obs) / 2.0)
+        unscale = staticmethod(lambda u: np.asarray(u) * 2.0)
+
+    units = np.array([[0.0], [1.0], [3.0]])
+    nearest = yardsticks.through_map(lambda o: o, Doubling(), units)
+    assert nearest(np.array([1.4])).tolist() == [2.0]  # scaled 0.7, nearest unit 1.0, unscaled 2.0
+    blended = yardsticks.through_map(lambda o: o, Doubling(), units, 2)
+    # scaled 0.5: units 0 and 1 at 0.5 each, the next (3.0) at 2.5: weights 2 - 0.4 each, a blend of 0 and 2
+    assert blended(np.array([1.0])).tolist() == [1.0]
+    assert blended(np.array([2.0])).tolist() == [2.0]  # on a unit: that unit alone
+    # weights fall to 0 as a unit leaves the nearest set: at scaled 2.0 (units 1 and 3 at 1.0, unit 0 at 2.0)
+    assert blended(np.array([4.0])).tolist() == [4.0]
+
+
+def test_the_yardsticks_see_the_state_through_the_presets_learned_input_map():
+    from somarm.reproduce import yardsticks
+
+    rows = dict(yardsticks.inverted_pendulum(2, 0, map_steps=300))
+    seen = [label for label in rows if label.startswith("state seen through the preset's 20x20 input map after 300")]
+    # the nearest unit, the blend, and the blend of each unit's torque rounded to 3 grids
+    assert len(seen) == 5 and all(1.0 <= rows[label] <= 1000.0 for label in seen)
+    assert any(label.endswith("each unit's torque rounded to 21 even in [-1, 1]") for label in seen)
+    assert not any(label.startswith("state seen") for label in dict(yardsticks.inverted_pendulum(1, 0)))
