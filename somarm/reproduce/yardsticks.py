@@ -158,20 +158,20 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
     low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed))
     config = presets.get("invertedpendulum")
     preset = _levels(config.action_shape, env_id, config.grid_span)
-    narrow = _levels((3,), env_id, 1.0 / 6.0)
+    whole, narrow = _levels((3,), env_id), _levels((3,), env_id, 1.0 / 6.0)
     even = _levels((5,), env_id)
     packed = np.max(even) * np.linspace(-1.0, 1.0, 9) ** 3
     rows = [("linear controller", linear),
             (f"torque rounded to the preset's {preset.size} torques ({_torques(preset)})", round_to(linear, preset)),
-            (f"torque rounded to {narrow.size} torques over a sixth of the box ({_torques(narrow)})",
-             round_to(linear, narrow)),
+            (f"torque rounded to 3 torques over the whole box ({_torques(whole)})", round_to(linear, whole)),
+            (f"torque rounded to 3 torques over a sixth of the box ({_torques(narrow)})", round_to(linear, narrow)),
             (f"torque rounded to {even.size} even torques", round_to(linear, even)),
             ("torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])", round_to(linear, packed))]
     rows += [(f"state at the centre of its cell, {k}^4 = {k ** 4:,} cells", cell_centre(linear, low, high, k))
              for k in (5, 9, 17)]
     fine = np.linspace(-1.0, 1.0, 21)
     rows += _map_rows(env_id, linear, map_steps, seed,
-                      ((f"the preset's {preset.size}", preset), (f"{narrow.size} over a sixth of the box", narrow),
+                      ((f"the preset's {preset.size}", preset), ("3 over the whole box", whole),
                        (f"{fine.size} even in [-1, 1]", fine)))
     return [(label, mean_return(env_id, policy, episodes, seed)) for label, policy in rows]
 

@@ -64,13 +64,18 @@ def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
         assert any("seeds 100-199" in choice for choice in preset.choices)
         # no random units and no perturbations: optimistic initial values alone explore
         assert c.p.value(0) == 0 and c.epsilon.value(0) == 0
-        assert c.action_init == "grid" and c.lambda_a.value(0) == 0 and c.n_a.value(0) == 0
+        assert c.action_init == "grid" and c.lambda_a.value(0) == 0
+        # a frozen grid; its Q neighbourhood spreads only over InvertedPendulum's 11 close torques
+        assert (c.n_a.value(0) > 0) == (name == "invertedpendulum")
         assert c.response == "interpolated"
     # optimism: above every discounted return (Pendulum's rewards are <= 0; an InvertedPendulum step
     # earns 1, so at most 1 / (1 - 0.99) = 100); MountainCar's q_init only above the goal's value from
     # the valley (100 x 0.99^100 = 37 > 30 > the action costs): untried pairs at 100 outbid the goal
     assert presets.get("pendulum").q_init == 0.0 and presets.get("pendulum").action_shape == (3,)
     assert presets.get("invertedpendulum").q_init >= 100 and 0 < presets.get("mountaincar").q_init < 37
+    # InvertedPendulum: 11 torques 0.1 apart over a sixth of the box, fine enough to balance
+    pendulum = presets.get("invertedpendulum")
+    assert pendulum.action_shape == (11,) and abs(6 * pendulum.grid_span - 1) < 1e-12
     # MountainCar: small pushes on the grid, and no torque of 0 (a resting car's cell would keep it)
     from somarm.learners.somq import grid_actions
 

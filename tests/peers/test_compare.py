@@ -206,7 +206,9 @@ def test_the_yardsticks_balance_and_reach_and_rounding_them_to_the_presets_grids
 
     pendulum = dict(yardsticks.inverted_pendulum(2, 0))
     assert pendulum["linear controller"] == 1000.0  # every step of both episodes balanced
-    assert pendulum["torque rounded to the preset's 3 torques (-3, 0, 3)"] < 200.0
+    assert pendulum["torque rounded to 3 torques over the whole box (-3, 0, 3)"] < 200.0
+    assert pendulum["torque rounded to the preset's 11 torques (-0.5, -0.4, -0.3, -0.2, -0.1, 0, 0.1, 0.2, 0.3, 0.4, "
+                    "0.5)"] > 900.0
     assert pendulum["torque rounded to 9 torques packed near 0 (3 s^3, s even in [-1, 1])"] > 900.0
     reacher = dict(yardsticks.reacher(20, 0))
     assert reacher["PD law"] > -6.0 and reacher["no torque"] < -9.0
