@@ -22,7 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 __all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "ENVIRONMENTS", "mean_return", "round_to", "cell_centre",
-           "learned_map", "through_map", "inverted_pendulum", "reacher", "measure", "table"]
+           "learned_map", "controller_map", "through_map", "inverted_pendulum", "reacher", "measure", "table"]
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
@@ -31,6 +31,24 @@ INVERTED_PENDULUM_GAINS = np.array([-0.05, 2.82, 1.67, 2.73])
 #: ``(kp, kd)`` of Reacher-v5's PD law.
 REACHER_GAINS = (20.0, 0.1)
 _REACHER_LINKS = (0.1, 0.11)
+#: The input maps learned on InvertedPendulum-v5's balancing controller's own states: the preset's
+#: 400 units, 2,500 and 10,000; the states it visits with this torque noise, and how many.
+CONTROLLER_MAP_SHAPES = ((20, 20), (50, 50), (100, 100))
+CONTROLLER_MAP_NOISE = 0.5
+CONTROLLER_MAP_STEPS = 100_000
+
+
+class _Scaling:
+    """The scaling of a benchmark task, ``[low, high]`` onto ``[0, 1]``, without its environments."""
+
+    def __init__(self, low: np.ndarray, high: np.ndarray):
+        self.low, self.span = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64) - low
+
+    def scale(self, obs: np.ndarray) -> np.ndarray:
+        return (np.asarray(obs, dtype=np.float64) - self.low) / self.span
+
+    def unscale(self, u: np.ndarray) -> np.ndarray:
+        return self.low + np.asarray(u, dtype=np.float64) * self.span
 
 
 def mean_return(env_id: str, policy: Policy, episodes: int, seed: int) -> float:
@@ -79,6 +97,45 @@ def learned_map(env_id: str, steps: int, seed: int):
     model = SOMQ(env_id, seed=seed, n_trials=1)
     model.learn(steps)
     return model.task, model.learner.input_weights[0].copy()
+
+
+def controller_map(env_id: str, policy: Policy, task, shape: tuple[int, ...], steps: int, noise: float,
+                   seed: int) -> np.ndarray:
+    """An input map trained on the states ``policy`` visits, not on SOM-Q's: the best case for the map.
+
+    ``policy`` runs with Gaussian noise of sd ``noise`` on its torque (so the states spread round the
+    ones it keeps) for ``steps`` steps, episodes reset from a generator seeded with ``seed``; a map of
+    ``shape`` starting uniform at random learns each scaled state (``task.scale``) once, in order, by the
+    benchmark presets' input-map recipe: lambda_S = 1/(t/2000 + 1), N_S = 1/(t/20000 + 1). Returns its
+    units ``(n, obs_dim)``.
+    """
+    import gymnasium
+
+    from somarm.learners import som
+
+    rng = np.random.default_rng(seed)
+    env = gymnasium.make(env_id)
+    low, high = env.action_space.low, env.action_space.high
+    states = []
+    try:
+        obs, _ = env.reset(seed=int(rng.integers(2**31)))
+        while len(states) < steps:
+            action = np.asarray(policy(obs), dtype=np.float64)
+            action = np.clip(action + noise * rng.standard_normal(action.shape), low, high)
+            obs, _, terminated, truncated, _ = env.step(action)
+            states.append(task.scale(obs))
+            if terminated or truncated:
+                obs, _ = env.reset(seed=int(rng.integers(2**31)))
+    finally:
+        env.close()
+    coordinates = som.grid_coordinates(shape)  # grid distances from each winner alone: no n x n matrix
+    units = rng.random((coordinates.shape[0], len(states[0])))
+    for t, state in enumerate(states):
+        x = np.asarray(state, dtype=np.float64)
+        winner = som.winners(units[None], x[None])[0]
+        near = som.neighbourhood(np.sqrt(((coordinates - coordinates[winner]) ** 2).sum(axis=1)), 1.0 / (t / 20000.0 + 1.0))
+        units += (1.0 / (t / 2000.0 + 1.0)) * near[:, None] * (x - units)
+    return units
 
 
 def through_map(policy: Policy, task, units: np.ndarray, n_basis: int = 1) -> Policy:
@@ -148,6 +205,7 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
     ``map_steps``) its state seen through the input map SOM-Q learns in that many steps (None: the
     benchmark's own)."""
     from somarm.learners import presets
+    from somarm.learners.interpolation import n_basis_for
     from somarm.tasks import gym_envs
 
     env_id = "InvertedPendulum-v5"
@@ -173,6 +231,16 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
     rows += _map_rows(env_id, linear, map_steps, seed,
                       ((f"the preset's {preset.size}", preset), ("3 over the whole box", whole),
                        (f"{fine.size} even in [-1, 1]", fine)))
+    if map_steps != 0:  # the best case for a map: trained on the balancing controller's own states
+        steps = CONTROLLER_MAP_STEPS if map_steps is None else map_steps
+        scaling = _Scaling(low, high)
+        for shape in CONTROLLER_MAP_SHAPES:
+            units = controller_map(env_id, linear, scaling, shape, steps, CONTROLLER_MAP_NOISE, seed)
+            n_basis = n_basis_for(shape)
+            where = (f"state seen through a {shape[0]}x{shape[1]} map learned on the controller's own states "
+                     f"({steps:,} steps, torque noise sd {CONTROLLER_MAP_NOISE:g})")
+            rows += [(f"{where}: its nearest unit", through_map(linear, scaling, units)),
+                     (f"{where}: blended over its {n_basis} nearest units", through_map(linear, scaling, units, n_basis))]
     return [(label, mean_return(env_id, policy, episodes, seed)) for label, policy in rows]
 
 

@@ -250,3 +250,23 @@ def test_the_yardsticks_see_the_state_through_the_presets_learned_input_map():
     assert len(seen) == 5 and all(1.0 <= rows[label] <= 1000.0 for label in seen)
     assert any(label.endswith("each unit's torque rounded to 21 even in [-1, 1]") for label in seen)
     assert not any(label.startswith("state seen") for label in dict(yardsticks.inverted_pendulum(1, 0)))
+    own = [label for label in rows if "map learned on the controller's own states (300 steps" in label]
+    assert len(own) == 2 * len(yardsticks.CONTROLLER_MAP_SHAPES) and all(1.0 <= rows[label] <= 1000.0 for label in own)
+
+
+def test_a_map_learned_on_the_controllers_states_gathers_round_them_and_is_reproducible():
+    from somarm.reproduce import yardsticks
+    from somarm.tasks import gym_envs
+
+    env_id = "InvertedPendulum-v5"
+    low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), 0))
+    scaling = yardsticks._Scaling(low, high)
+    assert np.allclose(scaling.unscale(scaling.scale(np.array([0.3, -0.1, 1.0, -2.0]))), [0.3, -0.1, 1.0, -2.0])
+
+    def linear(obs):
+        return np.array([yardsticks.INVERTED_PENDULUM_GAINS @ obs])
+
+    units = yardsticks.controller_map(env_id, linear, scaling, (5, 5), 2000, 0.5, 0)
+    # 25 units that start uniform over [0, 1]^4 end where a balanced pole's states are: none at an edge
+    assert units.shape == (25, 4) and units.min() > 0.3 and units.max() < 0.9
+    assert np.array_equal(units, yardsticks.controller_map(env_id, linear, scaling, (5, 5), 2000, 0.5, 0))
