@@ -236,6 +236,13 @@ def _run_ours(kind: str, config: CompareConfig, seed: int, rungs: list[int], sco
     return values, walls, settings.to_dict()
 
 
+def _peer_params(params: dict[str, Any]) -> dict[str, Any]:
+    """What TD3 and SAC read of a ``gym:ID`` task's parameters: not the observation scaling, since they
+    train and act on the environment's own observations (the scorer's scale-and-unscale round trip
+    differs from them by round-off in float64, below the float32 the networks read)."""
+    return {k: v for k, v in params.items() if k not in ("observation_low", "observation_high")}
+
+
 def _peer_env(config: CompareConfig, params: dict[str, Any]):
     """The Gymnasium environment TD3 and SAC train on, and how it is described in ``compare.json``."""
     import gymnasium
@@ -243,8 +250,7 @@ def _peer_env(config: CompareConfig, params: dict[str, Any]):
     from somarm.peers.gym import env_id
 
     if config.task.startswith("gym:"):
-        keywords = {k: v for k, v in params.items() if k not in ("observation_low", "observation_high")}
-        return gymnasium.make(config.task[4:], **keywords), config.task[4:] + " (its own observations and actions)"
+        return gymnasium.make(config.task[4:], **_peer_params(params)), config.task[4:] + " (its own observations and actions)"
     return (gymnasium.make(env_id(config.task), **params),
             env_id(config.task) + " (actions in [-1, 1] mapped to the task's box)")
 
@@ -325,6 +331,8 @@ def _fingerprint(kind: str, settings: dict[str, Any], config: CompareConfig, see
     """What one learner's training and scores at one seed depend on: a seed's record is reused only
     where all of it is the same."""
     scored = {"episodes": config.episodes} if score.episodic else {"observations": config.observations}
+    if kind in PEERS and config.task.startswith("gym:"):
+        params = _peer_params(params)
     return json.loads(json.dumps({
         "task": config.task, "task_params": params, "learner": kind, "seed": seed, "rungs": rungs, **scored,
         "eval_seed": config.eval_seed, "settings": settings, "somarm_version": __version__}, default=repr))

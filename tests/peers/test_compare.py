@@ -270,3 +270,24 @@ def test_a_map_learned_on_the_controllers_states_gathers_round_them_and_is_repro
     # 25 units that start uniform over [0, 1]^4 end where a balanced pole's states are: none at an edge
     assert units.shape == (25, 4) and units.min() > 0.3 and units.max() < 0.9
     assert np.array_equal(units, yardsticks.controller_map(env_id, linear, scaling, (5, 5), 2000, 0.5, 0))
+
+
+def test_a_peers_seed_record_does_not_depend_on_the_observation_scaling_it_never_reads():
+    from types import SimpleNamespace
+
+    config = compare.CompareConfig(task="gym:InvertedPendulum-v5", learners=("somq", "td3"), samples=100,
+                                   seeds=1, seed=0, episodes=5, eval_seed=0)
+    score = SimpleNamespace(episodic=True)
+    scalings = [{"observation_low": [-1.0, -0.2, -2.0, -4.0], "observation_high": [1.0, 0.2, 2.0, 4.0]},
+                {"observation_low": [-1.0, -0.2, -1.9, -4.2], "observation_high": [1.0, 0.2, 1.9, 4.2]}]
+
+    def fingerprint(kind, params):
+        return compare._fingerprint(kind, {"a": 1}, config, 3, [100], params, score)
+
+    # TD3 and SAC train and act on the environment's own observations: the scaling estimated at
+    # another seed leaves their record valid; somarm's learners see the scaled state, so theirs is not
+    assert fingerprint("td3", scalings[0]) == fingerprint("td3", scalings[1])
+    assert fingerprint("td3", scalings[0])["task_params"] == {}
+    assert fingerprint("somq", scalings[0]) != fingerprint("somq", scalings[1])
+    # a keyword the environment is made with still counts for everyone
+    assert fingerprint("sac", {**scalings[0], "reset_noise_scale": 0.1}) != fingerprint("sac", scalings[0])
