@@ -160,13 +160,11 @@ def _claims(m: dict, seeds: int) -> list[Claim]:
 
 
 def _published(envs: tuple[str, ...]) -> list[str]:
-    lines = ["RL Baselines3 Zoo's published results, as published (one trained agent each; mean ± sd of its "
-             "evaluation episodes):", ""]
-    for (kind, env_id), (mean, sd, steps) in zoo.PUBLISHED.items():
-        if env_id not in envs:
-            continue
-        spread = "" if sd is None else f" ± {fmt(sd)}"
-        lines.append(f"- {kind.upper()} on {env_id}: {fmt(mean)}{spread} after {fmt(steps)} steps")
+    published = [f"- {kind.upper()} on {env_id}: {fmt(mean)}{'' if sd is None else f' ± {fmt(sd)}'} after "
+                 f"{fmt(steps)} steps" for (kind, env_id), (mean, sd, steps) in zoo.PUBLISHED.items() if env_id in envs]
+    lines = (["RL Baselines3 Zoo's published results, as published (one trained agent each; mean ± sd of its "
+              "evaluation episodes):", "", *published] if published else
+             [f"RL Baselines3 Zoo publishes no TD3 or SAC result for {', '.join(envs)}."])
     thresholds = [f"{env_id} {fmt(v)}" for env_id, v in zoo.THRESHOLDS.items() if env_id in envs]
     if thresholds:
         lines += ["", "Gymnasium's reward thresholds: " + ", ".join(thresholds) + "."]

@@ -291,3 +291,13 @@ def test_a_peers_seed_record_does_not_depend_on_the_observation_scaling_it_never
     assert fingerprint("somq", scalings[0]) != fingerprint("somq", scalings[1])
     # a keyword the environment is made with still counts for everyone
     assert fingerprint("sac", {**scalings[0], "reset_noise_scale": 0.1}) != fingerprint("sac", scalings[0])
+
+
+def test_the_benchmarks_report_quotes_the_zoo_as_published_or_says_it_has_nothing():
+    from somarm.reproduce import benchmarks
+
+    lines = benchmarks._published(("Pendulum-v1",))
+    assert "- TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in lines
+    lines = benchmarks._published(("InvertedPendulum-v5",))
+    assert lines[0] == "RL Baselines3 Zoo publishes no TD3 or SAC result for InvertedPendulum-v5."
+    assert lines[-1] == "Gymnasium's reward thresholds: InvertedPendulum-v5 950."
