@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["all_finite", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
+__all__ = ["all_finite", "grid_distance", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -30,6 +30,15 @@ def all_finite(values):
         if not math.isfinite(value):
             return False
     return True
+
+
+@numba.njit(cache=True, nogil=True)
+def grid_distance(grid, a, b):
+    """Euclidean grid distance between units ``a`` and ``b`` of a map with coordinates ``grid (n_units, 2)``;
+    the same number as ``somarm.learners.som.grid_distances(grid)[a, b]``."""
+    d0 = grid[a, 0] - grid[b, 0]
+    d1 = grid[a, 1] - grid[b, 1]
+    return math.sqrt(d0 * d0 + d1 * d1)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -166,7 +175,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, winners, units, actions,
                  input_weights, action_weights, q, alpha, lambda_s, lambda_a, n_s, n_a,
-                 distances_s, distances_a, neighbourhood_q, shifted, low, high, wrap):
+                 grid_s, grid_a, neighbourhood_q, shifted, low, high, wrap):
     """Steps 6 to 9 for every trial, in place on the maps and the Q-table.
 
     ``bootstrap[trial]`` says whether to add ``gamma * max_i Q(s'_j, a_i)`` (s'_j the winner of
@@ -195,9 +204,9 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
                     top = q[trial, j_next, n]
             target = target + gamma * top
         for m in range(n_units_s):
-            psi_s[m] = max(0.0, 1.0 - distances_s[j, m] / (n_s + 1.0))
+            psi_s[m] = max(0.0, 1.0 - grid_distance(grid_s, j, m) / (n_s + 1.0))
         for n in range(n_units_a):
-            psi_a[n] = max(0.0, 1.0 - distances_a[k, n] / (n_a + 1.0))
+            psi_a[n] = max(0.0, 1.0 - grid_distance(grid_a, k, n) / (n_a + 1.0))
         # Step 7: the action map learns only if the perturbed action looks like an improvement.
         if target > q[trial, j, k]:
             if shifted[trial]:

@@ -1,6 +1,6 @@
 """What the map learners (SOM-Q and the Motoric Map) share: the input map and the step checks.
 
-``MapLearner`` builds the input SOM (grid, grid distances, weights), keeps what ``act`` leaves for
+``MapLearner`` builds the input SOM (grid coordinates, weights), keeps what ``act`` leaves for
 ``learn`` (observations, winners, chosen units, perturbed actions), checks observations, rewards
 and episode ends, refuses an epsilon that would overflow, and counts the grids' memory. A map
 learner adds its own action side in ``_build`` and the verbs.
@@ -13,16 +13,15 @@ import abc
 import numpy as np
 
 from somarm.learners.base import LearnerBase, initial_generator
-from somarm.learners.som import grid_coordinates, grid_distances
+from somarm.learners.som import grid_coordinates
 
 __all__ = ["MapLearner", "grid_floats", "shape_text"]
 
 
 def grid_floats(shape: tuple[int, ...]) -> int:
-    """Floats a map's grid distances take while built: a ``(units, units, grid dims)`` difference,
-    then the ``(units, units)`` distances."""
-    units = int(np.prod(shape))
-    return units * units * (len(shape) + 1)
+    """Floats a map's grid takes: its ``(units, 2)`` coordinates. Grid distances are computed from
+    the centre unit when needed, never stored as a ``(units, units)`` matrix."""
+    return int(np.prod(shape)) * 2
 
 
 def shape_text(shape: tuple[int, ...]) -> str:
@@ -38,7 +37,7 @@ class MapLearner(LearnerBase):
 
     def _build(self) -> None:
         self._check_epsilon()
-        self.input_grid, self._distances_s = self._grid(self.config.input_shape)
+        self.input_grid = grid_coordinates(self.config.input_shape)
         self.input_weights = np.empty((self.n_trials, self.input_grid.shape[0], self.obs_dim))
         # What act() leaves for learn(): observations, winners, chosen units, perturbed actions.
         self._observations = np.zeros((self.n_trials, self.obs_dim))
@@ -65,11 +64,6 @@ class MapLearner(LearnerBase):
             if not np.isfinite(largest * span * 4.0 + np.max(np.abs([self.action_low, self.action_high]))):
                 raise ValueError(f"epsilon={largest:g} is too large: a perturbed action overflows; "
                                  "give a number of the size of the action range")
-
-    @staticmethod
-    def _grid(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-        coordinates = grid_coordinates(shape)
-        return coordinates, grid_distances(coordinates)
 
     def _initial_generators(self) -> list[np.random.Generator]:
         return [initial_generator(self.seed, trial_id) for trial_id in self.trial_ids]

@@ -32,7 +32,7 @@ import numpy as np
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
-from somarm.learners.som import neighbourhood, update, winners
+from somarm.learners.som import distances_from, neighbourhood, update, winners
 
 __all__ = ["MotoricConfig", "MotoricMap"]
 
@@ -102,7 +102,7 @@ class MotoricMap(MapLearner):
     @classmethod
     def memory_needed(cls, config: MotoricConfig, *, n_trials: int, obs_dim: int,
                       action_dim: int) -> tuple[str, float]:
-        """The input grid's distances, and per trial the input weights, private actions and values."""
+        """The input grid's coordinates, and per trial the input weights, private actions and values."""
         n_s = int(np.prod(config.input_shape))
         n_floats = grid_floats(config.input_shape) + n_trials * (n_s * obs_dim + n_s * action_dim + n_s)
         return (f"a motoric learner with input_shape={shape_text(config.input_shape)} and {n_trials} trial(s)",
@@ -164,15 +164,15 @@ class MotoricMap(MapLearner):
         improved = target > values[self._rows, j]
         if improved.any():
             update(self.action_weights, self._actions, j, cfg.lambda_a.value(t), cfg.n_a.value(t),
-                   self._distances_s, mask=improved)
+                   self.input_grid, mask=improved)
         alpha = cfg.alpha.value(t)
         if cfg.neighbourhood_values:
-            rates = alpha * neighbourhood(self._distances_s[j], cfg.n_s.value(t))
+            rates = alpha * neighbourhood(distances_from(self.input_grid, j), cfg.n_s.value(t))
             values += rates * (target[:, None] - values)
         else:
             values[self._rows, j] += alpha * (target - values[self._rows, j])
         update(self.input_weights, self._observations, j, cfg.lambda_s.value(t), cfg.n_s.value(t),
-               self._distances_s)
+               self.input_grid)
         self._pending = False
         self.t += 1
 

@@ -23,6 +23,7 @@ __all__ = [
     "map_shape",
     "grid_coordinates",
     "grid_distances",
+    "distances_from",
     "neighbourhood",
     "squared_distances",
     "winners",
@@ -60,6 +61,21 @@ def grid_coordinates(shape: tuple[int, ...]) -> np.ndarray:
 def grid_distances(coordinates: np.ndarray) -> np.ndarray:
     """Euclidean grid distance between every pair of units, ``(n_units, n_units)``."""
     delta = coordinates[:, None, :] - coordinates[None, :, :]
+    return np.sqrt((delta * delta).sum(axis=-1))
+
+
+def distances_from(coordinates: np.ndarray, centres) -> np.ndarray:
+    """Euclidean grid distance from each centre unit to every unit, row ``centres`` of ``grid_distances``
+    without the ``(n_units, n_units)`` matrix (800 MB for a 100 x 100 map).
+
+    Args:
+      coordinates: ``grid_coordinates`` of the map, ``(n_units, 2)``.
+      centres: unit indices, any shape.
+
+    Returns:
+      ``centres.shape + (n_units,)``; the same numbers as the rows of ``grid_distances``.
+    """
+    delta = coordinates[np.asarray(centres)][..., None, :] - coordinates
     return np.sqrt((delta * delta).sum(axis=-1))
 
 
@@ -113,7 +129,7 @@ def winners(weights: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def update(
     weights: np.ndarray, x: np.ndarray, centres: np.ndarray, rate: float, width: float,
-    distances: np.ndarray, *, mask: np.ndarray | None = None,
+    coordinates: np.ndarray, *, mask: np.ndarray | None = None,
 ) -> None:
     """The SOM update, in place: ``w_m += rate * psi(centre, m, width) * (x - w_m)`` for every unit m.
 
@@ -123,10 +139,10 @@ def update(
       centres: the unit each trial's neighbourhood is centred on, ``(n_trials,)``.
       rate: learning rate (lambda).
       width: neighbourhood size N.
-      distances: ``grid_distances`` of the map, ``(n_units, n_units)``.
+      coordinates: ``grid_coordinates`` of the map, ``(n_units, 2)``.
       mask: optional ``(n_trials,)`` bool; trials where it is False do not move.
     """
-    rates = rate * neighbourhood(distances[centres], width)  # (n_trials, n_units)
+    rates = rate * neighbourhood(distances_from(coordinates, centres), width)  # (n_trials, n_units)
     if mask is not None:
         rates = np.where(mask[:, None], rates, 0.0)
     weights += rates[:, :, None] * (x[:, None, :] - weights)

@@ -36,7 +36,7 @@ from somarm.learners import _kernels, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
-from somarm.learners.som import winners
+from somarm.learners.som import grid_coordinates, winners
 from somarm.validation import check_number
 
 __all__ = ["RESPONSES", "ACTION_INITS", "SOMQConfig", "SOMQ", "row_width", "grid_actions"]
@@ -176,7 +176,7 @@ class SOMQ(MapLearner):
     @classmethod
     def memory_needed(cls, config: SOMQConfig, *, n_trials: int, obs_dim: int,
                       action_dim: int) -> tuple[str, float]:
-        """Both maps' grid distances, and per trial the weights of both maps and Q (see ``LearnerBase``)."""
+        """Both maps' grid coordinates, and per trial the weights of both maps and Q (see ``LearnerBase``)."""
         n_s, n_a = int(np.prod(config.input_shape)), int(np.prod(config.action_shape))
         n_floats = grid_floats(config.input_shape) + grid_floats(config.action_shape)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -185,7 +185,7 @@ class SOMQ(MapLearner):
 
     def _build_maps(self) -> None:
         cfg = self.config
-        self.action_grid, self._distances_a = self._grid(cfg.action_shape)
+        self.action_grid = grid_coordinates(cfg.action_shape)
         n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
         self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
         spread = grid_actions(cfg.action_shape, self.action_low, self.action_high, cfg.grid_span) \
@@ -242,7 +242,7 @@ class SOMQ(MapLearner):
             interpolation.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, rows, values["p"],
                 self._epsilons(values["epsilon"]), self.action_low, self.action_high, self._wrap,
-                self.config.noise == "gaussian", self._distances_a, self._n_basis, self._winners,
+                self.config.noise == "gaussian", self.action_grid, self._n_basis, self._winners,
                 self._units, self._outputs, self._actions, self._shifted,
             )
             self._pending = True
@@ -276,7 +276,7 @@ class SOMQ(MapLearner):
             r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
             values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
-            self._distances_s, self._distances_a, self.config.neighbourhood_q, self._shifted,
+            self.input_grid, self.action_grid, self.config.neighbourhood_q, self._shifted,
             self.action_low, self.action_high, self._wrap,
         )
         self._pending = False
@@ -310,7 +310,7 @@ class SOMQ(MapLearner):
             many = x.reshape(self.n_trials, -1, self.obs_dim)
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             interpolation.predict_kernel(np.ascontiguousarray(many), self.input_weights, self.action_weights,
-                                         self.q, self._distances_a, self._n_basis, self.action_low,
+                                         self.q, self.action_grid, self._n_basis, self.action_low,
                                          self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
         _, units = self.greedy_units(observations)

@@ -133,7 +133,7 @@ def controller_map(env_id: str, policy: Policy, task, shape: tuple[int, ...], st
     for t, state in enumerate(states):
         x = np.asarray(state, dtype=np.float64)
         winner = som.winners(units[None], x[None])[0]
-        near = som.neighbourhood(np.sqrt(((coordinates - coordinates[winner]) ** 2).sum(axis=1)), 1.0 / (t / 20000.0 + 1.0))
+        near = som.neighbourhood(som.distances_from(coordinates, winner), 1.0 / (t / 20000.0 + 1.0))
         units += (1.0 / (t / 2000.0 + 1.0)) * near[:, None] * (x - units)
     return units
 

@@ -94,11 +94,11 @@ def test_memory_is_estimated_before_allocating(monkeypatch):
     from somarm import validation
 
     monkeypatch.setattr(validation, "_available_memory", lambda: 2**30)
-    config = SOMQConfig(input_shape=(100, 100), action_shape=(10,))
-    with pytest.raises(ValueError, match=r"input_shape=100x100, action_shape=10 and 1 trial\(s\) needs about "
-                                         r"2\.2 GiB of memory, more than the 1\.0 GiB available"):
+    config = SOMQConfig(input_shape=(1000, 1000), action_shape=(200,))  # Q alone: 2e8 floats
+    with pytest.raises(ValueError, match=r"input_shape=1000x1000, action_shape=200 and 1 trial\(s\) needs about "
+                                         r"1\.5 GiB of memory, more than the 1\.0 GiB available"):
         learners.make("somq", config, **BOX)
-    learners.make("somq", SOMQConfig(input_shape=(30, 30), action_shape=(10,)), **BOX)  # 19 MiB
+    learners.make("somq", SOMQConfig(input_shape=(100, 100), action_shape=(10,)), **BOX)  # 1.1 MiB
 
 
 @pytest.mark.parametrize("relative", [False, True])
@@ -123,6 +123,12 @@ def test_every_kind_is_layered_and_has_presets(kind):
     assert isinstance(presets.config_for(kind, "table2"), config_class)
 
 
+def _held_bytes(learner) -> int:
+    """Bytes of the arrays a learner holds, each counted once (the Motoric Map's action grid is its input grid)."""
+    arrays = {id(value): value for value in vars(learner).values() if isinstance(value, np.ndarray)}
+    return sum(value.nbytes for value in arrays.values())
+
+
 @pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_every_kind_estimates_its_memory_in_one_place_the_registry_reaches(kind, monkeypatch):
     from somarm import validation
@@ -133,11 +139,21 @@ def test_every_kind_estimates_its_memory_in_one_place_the_registry_reaches(kind,
     learner = learners.make(kind, config, n_trials=3, **BOX)
     # What it allocates is covered: the arrays the learner holds fit inside the estimate, but for
     # a few numbers per trial and dimension (bounds, winners, chosen cells) that no estimate counts.
-    held = sum(value.nbytes for value in vars(learner).values() if isinstance(value, np.ndarray))
+    held = _held_bytes(learner)
     assert held <= n_bytes + 64 * (3 + 2 + 1)
     monkeypatch.setattr(validation, "_available_memory", lambda: int(n_bytes) - 1)
     with pytest.raises(ValueError, match=rf"^a {kind} learner with .* needs about .* of memory, more than"):
         learners.make(kind, config, n_trials=3, **BOX)
+
+
+@pytest.mark.parametrize("kind", ["somq", "motoric"])
+def test_a_ten_thousand_unit_input_map_holds_no_grid_distance_matrix(kind):
+    config = learners.config_class(kind)(input_shape=(100, 100))
+    _, n_bytes = learners.memory_needed(kind, config, n_trials=1, obs_dim=4, action_dim=1)
+    assert n_bytes < 10e6  # a (10,000 x 10,000) distance matrix alone would take 800 MB
+    learner = learners.make(kind, config, n_trials=1, observation_low=np.zeros(4), observation_high=np.ones(4),
+                            action_low=np.zeros(1), action_high=np.ones(1))
+    assert _held_bytes(learner) <= n_bytes + 64 * (1 + 4 + 1)
 
 
 def test_an_unknown_kind_has_no_memory_estimate():

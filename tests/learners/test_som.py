@@ -1,7 +1,9 @@
 import numpy as np
 import pytest
 
+from somarm.learners._kernels import grid_distance
 from somarm.learners.som import (
+    distances_from,
     grid_coordinates,
     grid_distances,
     map_shape,
@@ -25,6 +27,16 @@ def test_grid_distance_is_euclidean():
     np.testing.assert_array_equal(line[2], [2, 1, 0, 1, 2])
 
 
+@pytest.mark.parametrize("shape", [(7,), (4, 6), (1, 5)])
+def test_distances_from_the_centre_are_the_rows_of_the_matrix_bit_for_bit(shape):
+    grid = grid_coordinates(shape)
+    matrix = grid_distances(grid)
+    centres = np.array([[0, len(grid) - 1], [len(grid) // 2, 1]])
+    np.testing.assert_array_equal(distances_from(grid, centres), matrix[centres])
+    compiled = [[grid_distance(grid, a, b) for b in range(len(grid))] for a in range(len(grid))]
+    np.testing.assert_array_equal(np.array(compiled), matrix)
+
+
 def test_linear_neighbourhood_formula():
     d = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
     np.testing.assert_allclose(neighbourhood(d, 2.0), [1, 2 / 3, 1 / 3, 0, 0])
@@ -45,8 +57,7 @@ def test_winner_by_squared_distance_lowest_index_on_ties():
 def test_update_three_unit_map_planted_weights():
     weights = np.array([[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]])
     x = np.array([[1.25, 0.5]])
-    distances = grid_distances(grid_coordinates((3,)))
-    update(weights, x, np.array([1]), 0.5, 1.0, distances)  # psi = [0.5, 1, 0.5], rates [0.25, 0.5, 0.25]
+    update(weights, x, np.array([1]), 0.5, 1.0, grid_coordinates((3,)))  # psi = [0.5, 1, 0.5], rates [0.25, 0.5, 0.25]
     np.testing.assert_array_equal(weights[0], [[0.3125, 0.125], [1.125, 0.25], [1.8125, 0.125]])
 
 
@@ -55,11 +66,11 @@ def test_update_mask_and_batch_independence():
     weights = rng.random((3, 4, 2))
     before = weights.copy()
     x = rng.random((3, 2))
-    distances = grid_distances(grid_coordinates((2, 2)))
-    update(weights, x, np.array([0, 3, 1]), 0.3, 1.0, distances, mask=np.array([True, False, True]))
+    grid = grid_coordinates((2, 2))
+    update(weights, x, np.array([0, 3, 1]), 0.3, 1.0, grid, mask=np.array([True, False, True]))
     np.testing.assert_array_equal(weights[1], before[1])
     alone = before[2:3].copy()
-    update(alone, x[2:3], np.array([1]), 0.3, 1.0, distances)
+    update(alone, x[2:3], np.array([1]), 0.3, 1.0, grid)
     np.testing.assert_array_equal(weights[2], alone[0])
 
 
