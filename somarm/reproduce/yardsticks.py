@@ -38,19 +38,6 @@ CONTROLLER_MAP_NOISE = 0.5
 CONTROLLER_MAP_STEPS = 100_000
 
 
-class _Scaling:
-    """The scaling of a benchmark task, ``[low, high]`` onto ``[0, 1]``, without its environments."""
-
-    def __init__(self, low: np.ndarray, high: np.ndarray):
-        self.low, self.span = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64) - low
-
-    def scale(self, obs: np.ndarray) -> np.ndarray:
-        return (np.asarray(obs, dtype=np.float64) - self.low) / self.span
-
-    def unscale(self, u: np.ndarray) -> np.ndarray:
-        return self.low + np.asarray(u, dtype=np.float64) * self.span
-
-
 def mean_return(env_id: str, policy: Policy, episodes: int, seed: int) -> float:
     """The mean undiscounted return of ``policy`` over ``episodes`` episodes reset with seeds
     ``seed, seed + 1, ...``; actions are clipped to the action box."""
@@ -233,7 +220,7 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
                        (f"{fine.size} even in [-1, 1]", fine)))
     if map_steps != 0:  # the best case for a map: trained on the balancing controller's own states
         steps = CONTROLLER_MAP_STEPS if map_steps is None else map_steps
-        scaling = _Scaling(low, high)
+        scaling = gym_envs.BoxScaling(low, high)
         for shape in CONTROLLER_MAP_SHAPES:
             units = controller_map(env_id, linear, scaling, shape, steps, CONTROLLER_MAP_NOISE, seed)
             n_basis = n_basis_for(shape)

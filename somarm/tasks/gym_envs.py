@@ -37,7 +37,7 @@ from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
-__all__ = ["PREFIX", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "KNOWN_RANGES",
+__all__ = ["PREFIX", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "KNOWN_RANGES",
            "estimate_bounds"]
 
 #: What a Gymnasium task name starts with.
@@ -66,6 +66,23 @@ _DEFAULT_STEPS = 100_000
 KNOWN_RANGES: dict[str, dict[int, tuple[float, float]]] = {
     "InvertedPendulum-v5": {0: (-1.0, 1.0), 1: (-0.2, 0.2)},
 }
+
+
+class BoxScaling:
+    """``[low, high]`` onto ``[0, 1]`` per dimension and back: how a gym task's observations reach the
+    learner, usable without opening an environment."""
+
+    def __init__(self, low: Any, high: Any):
+        self.low = np.asarray(low, dtype=np.float64)
+        self.high = np.asarray(high, dtype=np.float64)
+
+    def scale(self, observations: Any) -> np.ndarray:
+        """Raw observations ``(..., obs_dim)`` onto ``[0, 1]``."""
+        return (np.asarray(observations, dtype=np.float64) - self.low) / (self.high - self.low)
+
+    def unscale(self, observations: Any) -> np.ndarray:
+        """The inverse of ``scale``."""
+        return self.low + np.asarray(observations, dtype=np.float64) * (self.high - self.low)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -221,6 +238,7 @@ class GymTask(TaskBase):
         else:
             self.scale_low = np.asarray(params.observation_low, dtype=np.float64)
             self.scale_high = np.asarray(params.observation_high, dtype=np.float64)
+        self.scaling = BoxScaling(self.scale_low, self.scale_high)
         self.observation_low = np.zeros(self.scale_low.size)
         self.observation_high = np.ones(self.scale_low.size)
         self.action_low, self.action_high = facts["action_low"], facts["action_high"]
@@ -247,11 +265,11 @@ class GymTask(TaskBase):
     # -- the boundary with Gymnasium -------------------------------------------------------
     def scale(self, observations: Any) -> np.ndarray:
         """Raw observations ``(..., obs_dim)`` as the learner sees them: ``[low, high]`` onto ``[0, 1]``."""
-        return (np.asarray(observations, dtype=np.float64) - self.scale_low) / (self.scale_high - self.scale_low)
+        return self.scaling.scale(observations)
 
     def unscale(self, observations: Any) -> np.ndarray:
         """The inverse of ``scale``: the environment's own observations."""
-        return self.scale_low + np.asarray(observations, dtype=np.float64) * (self.scale_high - self.scale_low)
+        return self.scaling.unscale(observations)
 
     def env_action(self, env, action: np.ndarray) -> np.ndarray:
         """A float64 action inside the Box as the environment's dtype, kept inside its Box after rounding."""

@@ -210,3 +210,16 @@ def test_somq_learns_pendulum_well_beyond_random_actions():
     greedy = run.greedy_measures(result.learner, result.task, seed=7)
     assert result.config.preset == "pendulum"
     assert greedy["greedy_mean_return"] >= -800.0, greedy
+
+
+def test_a_box_scaling_maps_its_bounds_onto_the_unit_box_and_back_as_the_task_does():
+    from somarm.tasks.gym_envs import BoxScaling
+
+    scaling = BoxScaling([-2.0, 0.0], [2.0, 10.0])
+    np.testing.assert_array_equal(scaling.scale([[-2.0, 0.0], [0.0, 5.0], [2.0, 10.0]]), [[0, 0], [0.5, 0.5], [1, 1]])
+    raw = np.random.default_rng(0).uniform(-3.0, 12.0, (50, 2))
+    np.testing.assert_allclose(scaling.unscale(scaling.scale(raw)), raw, rtol=0, atol=1e-12)
+    task = tasks.make("gym:Pendulum-v1")  # the Box's own bounds: cos, sin in [-1, 1], velocity in [-8, 8]
+    np.testing.assert_array_equal(task.scale([[1.0, -1.0, 4.0]]), [[1.0, 0.0, 0.75]])
+    np.testing.assert_array_equal(task.unscale(task.scaling.scale([[0.5, 0.5, -8.0]])), [[0.5, 0.5, -8.0]])
+    task.close()
