@@ -459,9 +459,9 @@ def test_reproduce_at_a_few_seeds_still_runs_under_the_same_limit(tmp_path):
 
 def test_a_sweep_point_that_cannot_fit_is_refused_and_its_folder_not_made(tmp_path):
     out = tmp_path / "sweep"
-    done = somarm("sweep", "reach2", "--grid", "input_shape=10,2000x2000", "--steps", "200", "--no-progress",
+    done = somarm("sweep", "reach2", "--grid", "input_shape=10,20000x20000", "--steps", "200", "--no-progress",
                   "--out", str(out))
-    one_error_line(done, "sweep point input_shape=2000x2000: a somq learner", "of memory, more than the")
+    one_error_line(done, "sweep point input_shape=20000x20000: a somq learner", "of memory, more than the")
     assert not out.exists()
 
 

@@ -225,12 +225,12 @@ def test_points_are_typed_run_configs_named_by_their_settings_text():
 
 
 def test_a_point_that_cannot_fit_in_memory_is_refused_in_one_line_before_the_folder_is_made(tmp_path):
-    spec = SweepSpec(task="reach2", axes=(parse_grid("input_shape=10,2000x2000"),), n_trials=2, n_steps=200)
+    spec = SweepSpec(task="reach2", axes=(parse_grid("input_shape=10,20000x20000"),), n_trials=2, n_steps=200)
     out = tmp_path / "sweep"
     with pytest.raises(ValueError) as refused:
         run_sweep(spec, out, progress=False, figure=False)
     message = str(refused.value)
-    assert message.startswith("sweep point input_shape=2000x2000: a somq learner with input_shape=2000x2000")
+    assert message.startswith("sweep point input_shape=20000x20000: a somq learner with input_shape=20000x20000")
     assert "\n" not in message and "of memory, more than the" in message
     assert not out.exists()
 
