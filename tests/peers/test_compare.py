@@ -260,7 +260,7 @@ def test_a_map_learned_on_the_controllers_states_gathers_round_them_and_is_repro
 
     env_id = "InvertedPendulum-v5"
     low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), 0))
-    scaling = yardsticks._Scaling(low, high)
+    scaling = gym_envs.BoxScaling(low, high)
     assert np.allclose(scaling.unscale(scaling.scale(np.array([0.3, -0.1, 1.0, -2.0]))), [0.3, -0.1, 1.0, -2.0])
 
     def linear(obs):

@@ -126,9 +126,10 @@ def test_observations_are_scaled_from_the_box_or_from_an_estimate_kept_in_config
     config = RunConfig(task="gym:InvertedPendulum-v5", n_steps=200, block=100, seed=4).resolved()
     low, high = np.array(config.task_params["observation_low"]), np.array(config.task_params["observation_high"])
     assert low.shape == (4,) and np.all(high > low) and np.all(np.isfinite([low, high]))
-    # The cart's rail and the pole's ending angle are the environment's own; the velocities are estimated.
-    np.testing.assert_array_equal(low[:2], [-1.0, -0.2])
-    np.testing.assert_array_equal(high[:2], [1.0, 0.2])
+    # The cart's rail and the pole's ending angle are the environment's own; the velocities are estimated;
+    # the cart's position and velocity count 1/32 and the pole's angular velocity 1/2 (gym_envs.WIDENED).
+    np.testing.assert_array_equal(low[:2], [-32.0, -0.2])
+    np.testing.assert_array_equal(high[:2], [32.0, 0.2])
     result = run.train(config, progress=False)
     run.write(result, tmp_path / "run", figures=False)
     assert json.loads((tmp_path / "run" / "config.json").read_text())["task_params"]["observation_low"] == list(low)
@@ -223,3 +224,15 @@ def test_a_box_scaling_maps_its_bounds_onto_the_unit_box_and_back_as_the_task_do
     np.testing.assert_array_equal(task.scale([[1.0, -1.0, 4.0]]), [[1.0, 0.0, 0.75]])
     np.testing.assert_array_equal(task.unscale(task.scaling.scale([[0.5, 0.5, -8.0]])), [[0.5, 0.5, -8.0]])
     task.close()
+
+
+def test_a_widened_dimension_keeps_its_middle_and_spans_its_factor_times_the_range(monkeypatch):
+    from somarm.tasks import gym_envs
+
+    params = gym_envs.GymParams("InvertedPendulum-v5")
+    low, high = (np.array(b) for b in gym_envs.estimate_bounds(params, 3))
+    monkeypatch.setattr(gym_envs, "WIDENED", {})
+    plain_low, plain_high = (np.array(b) for b in gym_envs.estimate_bounds(params, 3))
+    np.testing.assert_allclose((high - low) / (plain_high - plain_low), [32.0, 1.0, 32.0, 2.0])
+    np.testing.assert_allclose(low + high, plain_low + plain_high, atol=1e-12)
+    np.testing.assert_array_equal(plain_low[:2], [-1.0, -0.2])  # the rail and the ending angle
