@@ -486,7 +486,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "of the box 146 and 5 over a fifth 151 (seed 100, no neighbourhood); the action map learning "
          "(lambda_A = 1/2 decaying, perturbations of 2% of the box) 112 (seed 100)",
          "held out (seeds 0-4, 5 trials x 100,000 steps, 100 greedy episodes per trial): 654, 978, 792, 820, "
-         "610, mean 771, short of 950; 70-90 s of training per run of 5 trials on 2 busy cores. With every "
+         "610, mean 771, short of 950; 44-50 s of training per run of 5 trials on 2 busy cores. With every "
          "dimension counted alike: 171, 196, 178, 168, 181, mean 179",
          "where it stops short: the trials split. Over seeds 0 and 2 (10 episodes each), 5 of 10 trials earn "
          "989-1000, 3 earn 347-786 and 2 earn 137 and 223; those balance the pole while the cart drifts to "
