@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["all_finite", "grid_distance", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
+__all__ = ["all_finite", "grid_distance", "neighbourhood_row", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -33,12 +33,28 @@ def all_finite(values):
 
 
 @numba.njit(cache=True, nogil=True)
-def grid_distance(grid, a, b):
-    """Euclidean grid distance between units ``a`` and ``b`` of a map with coordinates ``grid (n_units, 2)``;
-    the same number as ``somarm.learners.som.grid_distances(grid)[a, b]``."""
-    d0 = grid[a, 0] - grid[b, 0]
-    d1 = grid[a, 1] - grid[b, 1]
-    return math.sqrt(d0 * d0 + d1 * d1)
+def grid_distance(offsets, a, b):
+    """Grid distance between units ``a`` and ``b`` of a map whose ``somarm.learners.som.grid_offsets`` are
+    ``offsets (rows, cols)``; the same number as ``somarm.learners.som.grid_distances``' ``[a, b]``."""
+    cols = offsets.shape[1]
+    ra, rb = a // cols, b // cols
+    return offsets[abs(ra - rb), abs((a - ra * cols) - (b - rb * cols))]
+
+
+@numba.njit(cache=True, nogil=True)
+def neighbourhood_row(offsets, centre, width, out):
+    """The linear neighbourhood ``max(0, 1 - d / (width + 1))`` of every unit round ``centre`` into ``out``,
+    d the grid distance read from ``offsets`` (as ``somarm.learners.som.neighbourhood``, bit for bit)."""
+    rows, cols = offsets.shape
+    w = width + 1.0
+    r0 = centre // cols
+    c0 = centre - r0 * cols
+    m = 0
+    for r in range(rows):
+        dr = abs(r - r0)
+        for c in range(cols):
+            out[m] = max(0.0, 1.0 - offsets[dr, abs(c - c0)] / w)
+            m += 1
 
 
 @numba.njit(cache=True, nogil=True)
@@ -175,7 +191,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, winners, units, actions,
                  input_weights, action_weights, q, alpha, lambda_s, lambda_a, n_s, n_a,
-                 grid_s, grid_a, neighbourhood_q, shifted, low, high, wrap):
+                 offsets_s, offsets_a, neighbourhood_q, shifted, low, high, wrap):
     """Steps 6 to 9 for every trial, in place on the maps and the Q-table.
 
     ``bootstrap[trial]`` says whether to add ``gamma * max_i Q(s'_j, a_i)`` (s'_j the winner of
@@ -203,10 +219,8 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, win
                 if q[trial, j_next, n] > top:
                     top = q[trial, j_next, n]
             target = target + gamma * top
-        for m in range(n_units_s):
-            psi_s[m] = max(0.0, 1.0 - grid_distance(grid_s, j, m) / (n_s + 1.0))
-        for n in range(n_units_a):
-            psi_a[n] = max(0.0, 1.0 - grid_distance(grid_a, k, n) / (n_a + 1.0))
+        neighbourhood_row(offsets_s, j, n_s, psi_s)
+        neighbourhood_row(offsets_a, k, n_a, psi_a)
         # Step 7: the action map learns only if the perturbed action looks like an improvement.
         if target > q[trial, j, k]:
             if shifted[trial]:

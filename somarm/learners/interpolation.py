@@ -129,7 +129,7 @@ def _greedy(q, trial, j, tie):
 
 
 @numba.njit(cache=True, nogil=True)
-def _exploring_unit(q, trial, j, u, tie, grid_a):
+def _exploring_unit(q, trial, j, u, tie, offsets_a):
     """Step 2 when exploring: with probability NEIGHBOUR_SHARE (``u`` below it) a grid neighbour of the
     greedy unit, else (``u`` rescaled) a random unit as in the paper."""
     n_a = q.shape[2]
@@ -138,13 +138,13 @@ def _exploring_unit(q, trial, j, u, tie, grid_a):
     best = _greedy(q, trial, j, tie)
     count = 0
     for n in range(n_a):
-        if 0.0 < grid_distance(grid_a, best, n) <= 1.0:
+        if 0.0 < grid_distance(offsets_a, best, n) <= 1.0:
             count += 1
     if count == 0:  # a one-unit map
         return best
     pick = min(int(u / NEIGHBOUR_SHARE * count), count - 1)
     for n in range(n_a):
-        if 0.0 < grid_distance(grid_a, best, n) <= 1.0:
+        if 0.0 < grid_distance(offsets_a, best, n) <= 1.0:
             if pick == 0:
                 return n
             pick -= 1
@@ -152,7 +152,7 @@ def _exploring_unit(q, trial, j, u, tie, grid_a):
 
 
 @numba.njit(cache=True, nogil=True)
-def _response(x, trial, input_weights, action_weights, q, tie, grid_a, n_basis, low, high, wrap, order,
+def _response(x, trial, input_weights, action_weights, q, tie, offsets_a, n_basis, low, high, wrap, order,
               squared, beta, units, out):
     """The blended greedy action of trial ``trial`` for ``x`` into ``out``; returns (winner j, its greedy unit k)."""
     _nearest(x, input_weights, trial, order, squared)
@@ -180,7 +180,7 @@ def _response(x, trial, input_weights, action_weights, q, tie, grid_a, n_basis, 
     kept = beta[0]
     for i in range(1, n_used):
         units[i] = _greedy(q, trial, order[i], tie) if beta[i] > 0.0 else k
-        if beta[i] > 0.0 and grid_distance(grid_a, k, units[i]) > MAX_JUMP:
+        if beta[i] > 0.0 and grid_distance(offsets_a, k, units[i]) > MAX_JUMP:
             beta[i] = 0.0
         kept += beta[i]
     for d in range(out.shape[0]):
@@ -202,10 +202,10 @@ def _response(x, trial, input_weights, action_weights, q, tie, grid_a, n_basis, 
 
 @numba.njit(cache=True, nogil=True)
 def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon, low, high, wrap, gaussian,
-               grid_a, n_basis, winners, units, actions, targets, shifted):
+               offsets_a, n_basis, winners, units, actions, targets, shifted):
     """Steps 1 to 5 with the interpolated response, for every trial, in place.
 
-    Shapes as ``somarm.learners._kernels.act_kernel``, plus the action map's ``grid_a (n_a, 2)`` and ``targets
+    Shapes as ``somarm.learners._kernels.act_kernel``, plus the action map's ``offsets_a`` (``som.grid_offsets``) and ``targets
     (n_trials, action_dim)``: ``actions`` receives the perturbed actions a' (the output) and
     ``targets`` the corrected step-7 targets ``u_k + (a' - a)``, both inside the bounds (wrapped
     round where ``wrap``).
@@ -222,11 +222,11 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
         if row[0] < p:
             # Exploring: the paper's random action unit, its weights unblended.
             j = nearest_unit(observations[trial], input_weights[trial])
-            k = _exploring_unit(q, trial, j, row[1], row[2], grid_a)
+            k = _exploring_unit(q, trial, j, row[1], row[2], offsets_a)
             for i in range(proposal.shape[0]):
                 proposal[i] = action_weights[trial, k, i]
         else:
-            j, k = _response(observations[trial], trial, input_weights, action_weights, q, row[2], grid_a,
+            j, k = _response(observations[trial], trial, input_weights, action_weights, q, row[2], offsets_a,
                              n_basis, low, high, wrap, order, squared, beta, blended_units, proposal)
         for i in range(actions.shape[1]):
             noise = perturbation(row, i, gaussian)
@@ -245,7 +245,7 @@ def act_kernel(observations, input_weights, action_weights, q, rows, p, epsilon,
 
 
 @numba.njit(cache=True, nogil=True)
-def predict_kernel(observations, input_weights, action_weights, q, grid_a, n_basis, low, high, wrap, out):
+def predict_kernel(observations, input_weights, action_weights, q, offsets_a, n_basis, low, high, wrap, out):
     """Greedy interpolated responses, ties to the lowest index: observations ``(n_trials, n_obs,
     obs_dim)`` -> ``out (n_trials, n_obs, action_dim)``."""
     size = min(n_basis + 1, input_weights.shape[1])
@@ -255,6 +255,6 @@ def predict_kernel(observations, input_weights, action_weights, q, grid_a, n_bas
     blended_units = np.empty(size, dtype=np.int64)
     for trial in range(observations.shape[0]):
         for o in range(observations.shape[1]):
-            _response(observations[trial, o], trial, input_weights, action_weights, q, 0.0, grid_a, n_basis,
+            _response(observations[trial, o], trial, input_weights, action_weights, q, 0.0, offsets_a, n_basis,
                       low, high, wrap, order, squared, beta, blended_units, out[trial, o])
 

@@ -13,15 +13,15 @@ import abc
 import numpy as np
 
 from somarm.learners.base import LearnerBase, initial_generator
-from somarm.learners.som import grid_coordinates
+from somarm.learners.som import grid_coordinates, grid_offsets
 
 __all__ = ["MapLearner", "grid_floats", "shape_text"]
 
 
 def grid_floats(shape: tuple[int, ...]) -> int:
-    """Floats a map's grid takes: its ``(units, 2)`` coordinates. Grid distances are computed from
-    the centre unit when needed, never stored as a ``(units, units)`` matrix."""
-    return int(np.prod(shape)) * 2
+    """Floats a map's grid takes: its ``(units, 2)`` coordinates and its ``grid_offsets``, one distance
+    per unit. Grid distances are never stored as a ``(units, units)`` matrix."""
+    return int(np.prod(shape)) * 3
 
 
 def shape_text(shape: tuple[int, ...]) -> str:
@@ -38,6 +38,7 @@ class MapLearner(LearnerBase):
     def _build(self) -> None:
         self._check_epsilon()
         self.input_grid = grid_coordinates(self.config.input_shape)
+        self._offsets_s = grid_offsets(self.config.input_shape)
         self.input_weights = np.empty((self.n_trials, self.input_grid.shape[0], self.obs_dim))
         # What act() leaves for learn(): observations, winners, chosen units, perturbed actions.
         self._observations = np.zeros((self.n_trials, self.obs_dim))

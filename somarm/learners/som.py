@@ -24,6 +24,7 @@ __all__ = [
     "grid_coordinates",
     "grid_distances",
     "distances_from",
+    "grid_offsets",
     "neighbourhood",
     "squared_distances",
     "winners",
@@ -60,8 +61,7 @@ def grid_coordinates(shape: tuple[int, ...]) -> np.ndarray:
 
 def grid_distances(coordinates: np.ndarray) -> np.ndarray:
     """Euclidean grid distance between every pair of units, ``(n_units, n_units)``."""
-    delta = coordinates[:, None, :] - coordinates[None, :, :]
-    return np.sqrt((delta * delta).sum(axis=-1))
+    return distances_from(coordinates, np.arange(coordinates.shape[0]))
 
 
 def distances_from(coordinates: np.ndarray, centres) -> np.ndarray:
@@ -77,6 +77,16 @@ def distances_from(coordinates: np.ndarray, centres) -> np.ndarray:
     """
     delta = coordinates[np.asarray(centres)][..., None, :] - coordinates
     return np.sqrt((delta * delta).sum(axis=-1))
+
+
+def grid_offsets(shape: tuple[int, ...]) -> np.ndarray:
+    """Grid distance by offset: entry ``[dr, dc]`` is the distance between two units ``dr`` rows and
+    ``dc`` columns apart, ``(rows, cols)`` (``(n, 1)`` for a line). The compiled kernels read
+    distances from it (``somarm.learners._kernels.grid_distance``): a lookup as cheap as a row of
+    ``grid_distances``, for one number per unit instead of one per pair."""
+    rows, cols = (shape[0], 1) if len(shape) == 1 else shape
+    dr, dc = np.meshgrid(np.arange(rows, dtype=np.float64), np.arange(cols, dtype=np.float64), indexing="ij")
+    return np.sqrt(dr * dr + dc * dc)
 
 
 def neighbourhood(distances: np.ndarray, width: float) -> np.ndarray:

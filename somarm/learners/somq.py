@@ -36,7 +36,7 @@ from somarm.learners import _kernels, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
-from somarm.learners.som import grid_coordinates, winners
+from somarm.learners.som import grid_coordinates, grid_offsets, winners
 from somarm.validation import check_number
 
 __all__ = ["RESPONSES", "ACTION_INITS", "SOMQConfig", "SOMQ", "row_width", "grid_actions"]
@@ -186,6 +186,7 @@ class SOMQ(MapLearner):
     def _build_maps(self) -> None:
         cfg = self.config
         self.action_grid = grid_coordinates(cfg.action_shape)
+        self._offsets_a = grid_offsets(cfg.action_shape)
         n_s, n_a = self.input_grid.shape[0], self.action_grid.shape[0]
         self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
         spread = grid_actions(cfg.action_shape, self.action_low, self.action_high, cfg.grid_span) \
@@ -242,7 +243,7 @@ class SOMQ(MapLearner):
             interpolation.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, rows, values["p"],
                 self._epsilons(values["epsilon"]), self.action_low, self.action_high, self._wrap,
-                self.config.noise == "gaussian", self.action_grid, self._n_basis, self._winners,
+                self.config.noise == "gaussian", self._offsets_a, self._n_basis, self._winners,
                 self._units, self._outputs, self._actions, self._shifted,
             )
             self._pending = True
@@ -276,7 +277,7 @@ class SOMQ(MapLearner):
             r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
             values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
-            self.input_grid, self.action_grid, self.config.neighbourhood_q, self._shifted,
+            self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self._shifted,
             self.action_low, self.action_high, self._wrap,
         )
         self._pending = False
@@ -310,7 +311,7 @@ class SOMQ(MapLearner):
             many = x.reshape(self.n_trials, -1, self.obs_dim)
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             interpolation.predict_kernel(np.ascontiguousarray(many), self.input_weights, self.action_weights,
-                                         self.q, self.action_grid, self._n_basis, self.action_low,
+                                         self.q, self._offsets_a, self._n_basis, self.action_low,
                                          self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
         _, units = self.greedy_units(observations)

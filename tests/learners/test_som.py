@@ -1,11 +1,12 @@
 import numpy as np
 import pytest
 
-from somarm.learners._kernels import grid_distance
+from somarm.learners._kernels import grid_distance, neighbourhood_row
 from somarm.learners.som import (
     distances_from,
     grid_coordinates,
     grid_distances,
+    grid_offsets,
     map_shape,
     neighbourhood,
     squared_distances,
@@ -33,8 +34,18 @@ def test_distances_from_the_centre_are_the_rows_of_the_matrix_bit_for_bit(shape)
     matrix = grid_distances(grid)
     centres = np.array([[0, len(grid) - 1], [len(grid) // 2, 1]])
     np.testing.assert_array_equal(distances_from(grid, centres), matrix[centres])
-    compiled = [[grid_distance(grid, a, b) for b in range(len(grid))] for a in range(len(grid))]
+    offsets = grid_offsets(shape)
+    compiled = [[grid_distance(offsets, a, b) for b in range(len(grid))] for a in range(len(grid))]
     np.testing.assert_array_equal(np.array(compiled), matrix)
+
+
+@pytest.mark.parametrize("width", [0.0, 0.5, 1.0, np.sqrt(2.0) - 1.0, 2.0, 3.7, 9.0, 1e300])
+def test_the_compiled_neighbourhood_row_is_the_neighbourhood_of_the_distances_bit_for_bit(width):
+    matrix = grid_distances(grid_coordinates((9, 7)))
+    out = np.empty(63)
+    for centre in (0, 31, 62):
+        neighbourhood_row(grid_offsets((9, 7)), centre, width, out)
+        np.testing.assert_array_equal(out, neighbourhood(matrix[centre], width))
 
 
 def test_linear_neighbourhood_formula():
