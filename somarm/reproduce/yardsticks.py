@@ -119,9 +119,8 @@ def controller_map(env_id: str, policy: Policy, task, shape: tuple[int, ...], st
     units = rng.random((coordinates.shape[0], len(states[0])))
     for t, state in enumerate(states):
         x = np.asarray(state, dtype=np.float64)
-        winner = som.winners(units[None], x[None])[0]
-        near = som.neighbourhood(som.distances_from(coordinates, winner), 1.0 / (t / 20000.0 + 1.0))
-        units += (1.0 / (t / 2000.0 + 1.0)) * near[:, None] * (x - units)
+        som.update(units[None], x[None], som.winners(units[None], x[None]), 1.0 / (t / 2000.0 + 1.0),
+                   1.0 / (t / 20000.0 + 1.0), coordinates)
     return units
 
 

@@ -247,11 +247,9 @@ class GymTask(TaskBase):
             if not (np.isfinite(facts["observation_low"]).all() and np.isfinite(facts["observation_high"]).all()):
                 raise ValueError(f"{self.name}'s observation Box is unbounded: give observation_low and "
                                  "observation_high (a run estimates them: tasks.record(name).complete)")
-            self.scale_low, self.scale_high = facts["observation_low"], facts["observation_high"]
+            self.scaling = BoxScaling(facts["observation_low"], facts["observation_high"])
         else:
-            self.scale_low = np.asarray(params.observation_low, dtype=np.float64)
-            self.scale_high = np.asarray(params.observation_high, dtype=np.float64)
-        self.scaling = BoxScaling(self.scale_low, self.scale_high)
+            self.scaling = BoxScaling(params.observation_low, params.observation_high)
         self.observation_low = np.zeros(self.scale_low.size)
         self.observation_high = np.ones(self.scale_low.size)
         self.action_low, self.action_high = facts["action_low"], facts["action_high"]
@@ -266,6 +264,16 @@ class GymTask(TaskBase):
         self.terminal = np.zeros(self.n_trials, dtype=bool)  #: the last step terminated the episode
         self.truncated = np.zeros(self.n_trials, dtype=bool)  #: the last step hit the time limit
         self.t = 0
+
+    @property
+    def scale_low(self) -> np.ndarray:
+        """The raw observation that the learner sees as 0."""
+        return self.scaling.low
+
+    @property
+    def scale_high(self) -> np.ndarray:
+        """The raw observation that the learner sees as 1."""
+        return self.scaling.high
 
     def __repr__(self) -> str:
         return f"GymTask({self.params!r}, n_trials={self.n_trials})"
