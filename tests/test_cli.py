@@ -70,7 +70,7 @@ def test_train_writes_a_rerunnable_run(tmp_path, capsys):
         (["reproduce", "--out", " "], "--out needs a folder name"),
         (["train", "reach2", "--set", "epsilon=1e308"], "epsilon=1e+308 is too large"),
         (["train", "reach2", "--set", "input_shape=20000x20000"], "input_shape=20000x20000, action_shape=50 and 1 "
-                                                                 "trial(s), over 50000 steps needs about 158.0 GiB"),
+                                                                 "trial(s), over 50000 steps needs about 160.9 GiB"),
         (["train", "reach2", "--view", "--port", "70000"], "--port must be in 0..65535"),
         (["evaluate", "/nonexistent-run", "--observations", "0"], "--observations must"),
         (["bench", "learner", "--steps", "-5"], "--steps must be a whole number >= 1"),
