@@ -5,7 +5,9 @@ controller known to work tells what that form costs, apart from learning. Replay
 coarse the way SOM-Q is coarse: round its torque to the preset's grid (the action side), or compute it
 from the centre of a grid cell instead of the observation (the state side, as a nearest-unit lookup
 does), or from the input units SOM-Q itself learned: the nearest one, as the paper's winner response
-sees the state, or a blend over the nearest few, as the interpolated response does. Every number is a mean undiscounted return over fresh episodes of the environment itself.
+sees the state, or a blend over the nearest few, as the interpolated response does; or from maps of
+400 to 10,000 units learned on the controller's own states, the best case for a map of that size.
+Every number is a mean undiscounted return over fresh episodes of the environment itself.
 
 The controllers are this project's:
 
@@ -31,10 +33,11 @@ INVERTED_PENDULUM_GAINS = np.array([-0.05, 2.82, 1.67, 2.73])
 #: ``(kp, kd)`` of Reacher-v5's PD law.
 REACHER_GAINS = (20.0, 0.1)
 _REACHER_LINKS = (0.1, 0.11)
-#: The input maps learned on InvertedPendulum-v5's balancing controller's own states: the preset's
-#: 400 units, 2,500 and 10,000; the states it visits with this torque noise, and how many.
+#: The input maps learned on a controller's own states: the presets' 400 units, 2,500 and 10,000;
+#: the states it visits with this much torque noise (sd; a sixth of InvertedPendulum-v5's box, a tenth
+#: of Reacher-v5's, the step of its preset's grid), and how many.
 CONTROLLER_MAP_SHAPES = ((20, 20), (50, 50), (100, 100))
-CONTROLLER_MAP_NOISE = 0.5
+CONTROLLER_MAP_NOISE = {"InvertedPendulum-v5": 0.5, "Reacher-v5": 0.1}
 CONTROLLER_MAP_STEPS = 100_000
 
 
@@ -170,6 +173,27 @@ def _map_rows(env_id: str, policy: Policy, map_steps: int | None, seed: int,
             for label, levels in roundings]
 
 
+def _controller_map_rows(env_id: str, policy: Policy, scaling, map_steps: int | None,
+                         seed: int) -> list[tuple[str, Policy]]:
+    """The best case for an input map: ``policy`` seen through maps of each of ``CONTROLLER_MAP_SHAPES``
+    learned on its own states (``controller_map``, ``map_steps`` steps, None: ``CONTROLLER_MAP_STEPS``,
+    0: no rows) over the benchmark task's ``scaling``, by the nearest unit and blended."""
+    from somarm.learners.interpolation import n_basis_for
+
+    if map_steps == 0:
+        return []
+    steps, noise = CONTROLLER_MAP_STEPS if map_steps is None else map_steps, CONTROLLER_MAP_NOISE[env_id]
+    rows = []
+    for shape in CONTROLLER_MAP_SHAPES:
+        units = controller_map(env_id, policy, scaling, shape, steps, noise, seed)
+        where = (f"state seen through a {shape[0]}x{shape[1]} map learned on the controller's own states "
+                 f"({steps:,} steps, torque noise sd {noise:g})")
+        rows += [(f"{where}: its nearest unit", through_map(policy, scaling, units)),
+                 (f"{where}: blended over its {n_basis_for(shape)} nearest units",
+                  through_map(policy, scaling, units, n_basis_for(shape)))]
+    return rows
+
+
 def _levels(shape: tuple[int, ...], env_id: str, fraction: float = 1.0) -> np.ndarray:
     """The torques of each axis of a benchmark preset's frozen grid (``somq.grid_actions``) over the
     environment's action box, or over ``fraction`` of it round its middle; every axis here has the
@@ -191,7 +215,6 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
     ``map_steps``) its state seen through the input map SOM-Q learns in that many steps (None: the
     benchmark's own)."""
     from somarm.learners import presets
-    from somarm.learners.interpolation import n_basis_for
     from somarm.tasks import gym_envs
 
     env_id = "InvertedPendulum-v5"
@@ -217,16 +240,7 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
     rows += _map_rows(env_id, linear, map_steps, seed,
                       ((f"the preset's {preset.size}", preset), ("3 over the whole box", whole),
                        (f"{fine.size} even in [-1, 1]", fine)))
-    if map_steps != 0:  # the best case for a map: trained on the balancing controller's own states
-        steps = CONTROLLER_MAP_STEPS if map_steps is None else map_steps
-        scaling = gym_envs.BoxScaling(low, high)
-        for shape in CONTROLLER_MAP_SHAPES:
-            units = controller_map(env_id, linear, scaling, shape, steps, CONTROLLER_MAP_NOISE, seed)
-            n_basis = n_basis_for(shape)
-            where = (f"state seen through a {shape[0]}x{shape[1]} map learned on the controller's own states "
-                     f"({steps:,} steps, torque noise sd {CONTROLLER_MAP_NOISE:g})")
-            rows += [(f"{where}: its nearest unit", through_map(linear, scaling, units)),
-                     (f"{where}: blended over its {n_basis} nearest units", through_map(linear, scaling, units, n_basis))]
+    rows += _controller_map_rows(env_id, linear, gym_envs.BoxScaling(low, high), map_steps, seed)
     return [(label, mean_return(env_id, policy, episodes, seed)) for label, policy in rows]
 
 
@@ -241,8 +255,9 @@ def _reacher_pd(obs: np.ndarray) -> np.ndarray:
 
 def reacher(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[str, float]]:
     """No torque, the PD law, the PD law rounded to torque grids, and (with ``map_steps``) its state
-    seen through the input map SOM-Q learns in that many steps."""
+    seen through the input map SOM-Q learns in that many steps and through maps learned on its own states."""
     from somarm.learners import presets
+    from somarm.tasks import gym_envs
 
     config = presets.get("reacher")
     preset, whole = _levels(config.action_shape, "Reacher-v5", config.grid_span), _levels(config.action_shape, "Reacher-v5")
@@ -253,6 +268,9 @@ def reacher(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[s
         rows.append((f"PD law rounded to a {grid} grid over the whole box ({_torques(whole)} per joint)",
                      round_to(_reacher_pd, whole)))
     rows += _map_rows("Reacher-v5", _reacher_pd, map_steps, seed)
+    if map_steps != 0:  # the task's own scaling, estimated from random actions (an infinite Box)
+        bounds = gym_envs.estimate_bounds(gym_envs.GymParams("Reacher-v5"), seed)
+        rows += _controller_map_rows("Reacher-v5", _reacher_pd, gym_envs.BoxScaling(*bounds), map_steps, seed)
     return [(label, mean_return("Reacher-v5", policy, episodes, seed)) for label, policy in rows]
 
 

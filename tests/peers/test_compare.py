@@ -252,6 +252,12 @@ def test_the_yardsticks_see_the_state_through_the_presets_learned_input_map():
     assert not any(label.startswith("state seen") for label in dict(yardsticks.inverted_pendulum(1, 0)))
     own = [label for label in rows if "map learned on the controller's own states (300 steps" in label]
     assert len(own) == 2 * len(yardsticks.CONTROLLER_MAP_SHAPES) and all(1.0 <= rows[label] <= 1000.0 for label in own)
+    reacher = dict(yardsticks.reacher(2, 0, map_steps=300))
+    own = [label for label in reacher if "map learned on the controller's own states (300 steps, torque noise sd 0.1)"
+           in label]
+    # 50 steps, each at most 0.41 from the target with a torque cost of at most 2 (clipped to [-1, 1])
+    assert len(own) == 2 * len(yardsticks.CONTROLLER_MAP_SHAPES) and all(-121.0 <= reacher[label] < 0.0 for label in own)
+    assert not any("own states" in label for label in dict(yardsticks.reacher(1, 0)))
 
 
 def test_a_map_learned_on_the_controllers_states_gathers_round_them_and_is_reproducible():
