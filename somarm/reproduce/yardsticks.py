@@ -185,12 +185,11 @@ def _controller_map_rows(env_id: str, policy: Policy, scaling, map_steps: int | 
     steps, noise = CONTROLLER_MAP_STEPS if map_steps is None else map_steps, CONTROLLER_MAP_NOISE[env_id]
     rows = []
     for shape in CONTROLLER_MAP_SHAPES:
-        units = controller_map(env_id, policy, scaling, shape, steps, noise, seed)
+        units, n_basis = controller_map(env_id, policy, scaling, shape, steps, noise, seed), n_basis_for(shape)
         where = (f"state seen through a {shape[0]}x{shape[1]} map learned on the controller's own states "
                  f"({steps:,} steps, torque noise sd {noise:g})")
         rows += [(f"{where}: its nearest unit", through_map(policy, scaling, units)),
-                 (f"{where}: blended over its {n_basis_for(shape)} nearest units",
-                  through_map(policy, scaling, units, n_basis_for(shape)))]
+                 (f"{where}: blended over its {n_basis} nearest units", through_map(policy, scaling, units, n_basis))]
     return rows
 
 
