@@ -416,7 +416,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "N_S over 125,000 gave -186, -231, -179, -219, -197, mean -203: seed 1's mean held one trial at -476 "
          "against -163 to -176 for the other four. That trial swung the pendulum up but did not hold it: in its "
          "worst episodes (about -1,040) the pole was within 18 degrees of upright for only 24-32 of 200 steps, "
-         "under torques of 1.74 on average, so its table round the top learned to push rather than balance; a "
+         "under torques of 1.74 on average, so its table round the top learned to push rather than balance; the likely cause: a "
          "neighbourhood that stays wide late keeps spreading the swing-up's pushes over the balancing units. "
          "Also tried on seeds 110-112: alpha falling over 100,000 steps -209, -182, -166; over 50,000 -196, "
          "-196, -198. 150-190 s of training per run of 5 trials on 2 busy cores",
