@@ -146,13 +146,16 @@ def _claims(m: dict, seeds: int) -> list[Claim]:
             mean >= target, f"mean greedy return over the seeds >= {fmt(target)}"))
     if "Pendulum-v1" not in m:
         return claims
-    reached = [c for c in (m["Pendulum-v1"]["to_target"][k] for k in ("somq", "somq+")) if c is not None]
-    ours = min(reached, key=lambda c: c[1]) if reached else None
+    # Of the two responses, the one that gets there sooner (the target claim above takes the better end).
+    reached = {k: c for k in ("somq", "somq+") if (c := m["Pendulum-v1"]["to_target"][k]) is not None}
+    first = min(reached, key=lambda k: reached[k][1]) if reached else "somq"
+    ours = reached.get(first)
     td3 = m["Pendulum-v1"]["to_target"]["td3"]
     claims.append(Claim(
         f"Target (this project's): SOM-Q reaches -200 on Pendulum-v1 in at most 1/{fmt(_PENDULUM_SPEED)} of TD3's "
         "wall time.",
-        f"SOM-Q: {_reached(ours)}; TD3: {_reached(td3)} (training time only, each seed timed on the same machine).",
+        f"{NAMES[first]}: {_reached(ours)}; TD3: {_reached(td3)} (training time only, each seed timed on the "
+        "same machine).",
         # TD3 short of the target leaves nothing to compare with; SOM-Q short of it while TD3 gets there fails.
         None if td3 is None else ours is not None and ours[1] * _PENDULUM_SPEED <= td3[1],
         f"SOM-Q's seconds x {fmt(_PENDULUM_SPEED)} <= TD3's"))

@@ -192,26 +192,7 @@ def _write(
     out: Path, sections: list[Section], *, quick: bool, seeds: list[int], backend: str, total: float,
     complete: bool,
 ) -> None:
-    slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
-    where = ("every reward evaluated in MuJoCo (the tasks' default backend)" if backend == "mujoco" else
-             "every reward from the closed forms (backend `analytic`, a quick look; the default is MuJoCo; a "
-             "task without closed forms, reach2_obstacle, stays in MuJoCo)")
-    seed_text = (f"seed {seeds[0]}" if len(seeds) == 1 else
-                 f"{len(seeds)} seeds ({seeds[0]} to {seeds[-1]}: independent trial sets; figures from seed "
-                 f"{seeds[0]}; each verdict says in how many seeds the claim holds)")
-    header = [
-        f"Mode: **{'quick (reduced trial counts: verdicts are indicative only)' if quick else 'full'}**; "
-        f"{seed_text}; {where}; somarm {__version__}, "
-        f"Python {platform.python_version()}, {platform.machine()}.",
-        "",
-        f"Total wall time {total:.1f} s"
-        + (f"; slowest experiment `{slowest.name}` ({slowest.wall_time_s:.1f} s)." if slowest else ".")
-        + ("" if complete else " **Incomplete: not every experiment has run.**"),
-        "",
-        "Arm lengths, the goal circle, the four goals, the reading of epsilon in Tables 1 and 2 (a fraction of "
-        "the angle range), the Motoric Map's rules, run lengths and the levels and bounds used in the verdicts "
-        "are this project's choices, stated in each part; the paper publishes none of them.",
-    ]
+    header = _header(sections, quick=quick, seeds=seeds, backend=backend, total=total, complete=complete)
     atomic_write_text(out / "REPORT.md", render(sections, header=header, out_dir=out, seeds=seeds))
     atomic_write_json(
         out / "claims.json",
@@ -229,6 +210,44 @@ def _write(
             },
         },
     )
+
+
+def _header(sections: list[Section], *, quick: bool, seeds: list[int], backend: str, total: float,
+            complete: bool) -> list[str]:
+    """The report's opening lines: the mode, the seeds, where rewards come from, the wall time and
+    which values are this project's choices (the benchmarks part alone runs Gymnasium's own
+    environments, and its seeds may be read back from an earlier run)."""
+    benchmarks_only = bool(sections) and all(s.name.startswith("benchmarks") for s in sections)
+    slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
+    if benchmarks_only:
+        where = "every return from Gymnasium's own environment"
+    elif backend == "mujoco":
+        where = "every reward evaluated in MuJoCo (the tasks' default backend)"
+    else:
+        where = ("every reward from the closed forms (backend `analytic`, a quick look; the default is MuJoCo; a "
+                 "task without closed forms, reach2_obstacle, stays in MuJoCo)")
+    seed_text = (f"seed {seeds[0]}" if len(seeds) == 1 else
+                 f"{len(seeds)} seeds ({seeds[0]} to {seeds[-1]}: independent trial sets; figures from seed "
+                 f"{seeds[0]}; each verdict says in how many seeds the claim holds)")
+    timing = (f"Wall time of this run {total:.1f} s (learner seeds kept from an earlier run with `--resume` are "
+              "read back, not trained again; each learner's own training seconds are in the table)"
+              if benchmarks_only else f"Total wall time {total:.1f} s")
+    choices = ("The presets, run lengths, the peers' budgets, the targets and the yardsticks are this project's "
+               "choices, stated in the part; the paper ran no Gymnasium environment." if benchmarks_only else
+               "Arm lengths, the goal circle, the four goals, the reading of epsilon in Tables 1 and 2 (a fraction of "
+               "the angle range), the Motoric Map's rules, run lengths and the levels and bounds used in the "
+               "verdicts are this project's choices, stated in each part; the paper publishes none of them.")
+    return [
+        f"Mode: **{'quick (reduced trial counts: verdicts are indicative only)' if quick else 'full'}**; "
+        f"{seed_text}; {where}; somarm {__version__}, "
+        f"Python {platform.python_version()}, {platform.machine()}.",
+        "",
+        timing
+        + (f"; slowest experiment `{slowest.name}` ({slowest.wall_time_s:.1f} s)." if slowest else ".")
+        + ("" if complete else " **Incomplete: not every experiment has run.**"),
+        "",
+        choices,
+    ]
 
 
 def load_claims(out: Path) -> dict:

@@ -133,6 +133,9 @@ def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoo
     for kind in ("SOM-Q", "SOM-Q+ (interpolated)", "Motoric Map", "tabular (fixed grid)", "SB3 TD3", "SB3 SAC"):
         assert f"| Pendulum-v1 | {kind} | " in report
     assert "TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in report and "MountainCarContinuous" not in report
+    # Its header speaks of Gymnasium's environments, not of the paper's arms.
+    assert "every return from Gymnasium's own environment" in report and "Arm lengths" not in report
+    assert "Wall time of this run" in report and "the paper ran no Gymnasium environment" in report
     merged = json.loads((tmp_path / "benchmarks" / "Pendulum-v1" / "compare.json").read_text())
     assert set(merged["learners"]) == set(benchmarks.LEARNERS) and merged["metric"] == "return"
     assert (tmp_path / "benchmarks" / "Pendulum-v1" / "compare.png").stat().st_size > 10_000
@@ -196,6 +199,8 @@ def test_the_pendulum_speed_claim_fails_when_som_q_never_reaches_the_target_and_
     assert speed(measured(None, None, (20_000, 260.0))) is False
     assert speed(measured(None, None, None)) is None
     assert speed(measured((100_000, 60.0), (80_000, 40.0), (20_000, 260.0))) is True  # the faster of the two
+    named = benchmarks._claims(measured((100_000, 60.0), (80_000, 40.0), (20_000, 260.0)), 5)[-1].measured
+    assert named.startswith("SOM-Q+ (interpolated): 80000 samples, 40")
     assert speed(measured((100_000, 60.0), None, (20_000, 260.0))) is False
     claim = benchmarks._claims(measured(None, None, None), 5)[0]
     assert "-250.0 ± 1.0" in claim.measured and claim.holds is False
