@@ -401,7 +401,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "3 torques (-2, 0, 2), blended by the interpolated response",
          "a 40x40 input map whose neighbourhood Q-learning starts wide (N_S = 3/(t/60000 + 1)) and a "
          "learning rate that falls slowly (alpha = 1/(t/250000 + 1)), over 500,000 steps: the wide neighbourhood "
-         "lets 1,600 units learn as fast as 400 early on, and narrowing it to 0.11 by the end lets each unit "
+         "lets 1,600 units learn as fast as 400 early on, and narrowing it to 0.32 by the end lets each unit "
          "resolve its own part of the swing-up and the balance",
          "the same schedules over 120,000 steps (N_S over 30,000, alpha over 60,000) reached -244, -224 and -193 on "
          "tuning seeds 110-112 (5 trials, 100 greedy episodes each, the winner response); stretched 2.5 times "
@@ -410,7 +410,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "on the tuning seeds (4 torques, none of them 0, as MountainCar's: -189, -169, -180)",
          "held out (seeds 0-4, 5 trials x 500,000 steps, 100 greedy episodes per trial): -181.0, -179.0, -169.3, "
          "-191.7, -185.1, mean -181.2, every seed above the target -200, with an sd over trials of 4-17 per seed",
-         "N_S narrowing over 60,000 steps instead of 125,000 (ending at 0.11 instead of 1.0): on tuning seeds "
+         "N_S narrowing over 60,000 steps instead of 125,000 (ending at 0.32 instead of 0.6): on tuning seeds "
          "110-113 (5 trials x 500,000 steps) -177.5, -171.3, -152.8, -185.2 (mean -171.7) against -170.6, -173, "
          "-154, -203.8 (mean -175.4), with a smaller sd over trials (23.9 against 67.6 at seed 113). Held out, "
          "N_S over 125,000 gave -186, -231, -179, -219, -197, mean -203: seed 1's mean held one trial at -476 "
@@ -418,9 +418,9 @@ def _benchmarks() -> tuple[Preset, ...]:
          "worst episodes (about -1,040) the pole was within 18 degrees of upright for only 24-32 of 200 steps, "
          "under torques of 1.74 on average, so its table round the top learned to push rather than balance; the likely cause: a "
          "neighbourhood that stays wide late keeps spreading the swing-up's pushes over the balancing units. "
-         "Also tried on seeds 110-112: alpha falling over 100,000 steps -209, -182, -166; over 50,000 -196, "
-         "-196, -198. 150-190 s of training per run of 5 trials on 2 busy cores",
-         "earlier, tuning seed 100 (4 trials, "
+         "Also tried on seeds 110-112, with N_S over 125,000 (against its -171, -173, -154): alpha falling over "
+         "100,000 steps -209, -182, -166; over 50,000 -196, -196, -198. 150-190 s of training per run of 5 trials on 2 busy cores",
+         "other settings tried on tuning seed 100 (4 trials, "
          "20 greedy episodes each): 20x20 with N_S = 1/(t/20000 + 1) and alpha = 1/(t/20000 + 1) -342 at 60,000 "
          "steps; 30x30, N_S = 2 -311 (60,000) swinging to -412 (120,000); 40x40, N_S = 3 -225 (120,000) and "
          "-255 (200,000); then alpha over 60,000 instead of 20,000 -211 (120,000), over 10,000 -378, over "
@@ -440,8 +440,8 @@ def _benchmarks() -> tuple[Preset, ...]:
          "gamma 0.99 -244 and -310",
          "how far a map of this size can go: value iteration on a fixed 20x20 (angle, velocity) grid with 3 "
          "torques reaches -232, 9 torques -182, 30x30 -155 and 40x40 -147, so the 40x40 map is fine enough; "
-         "what separates -181 from -147 is learning noise: the trials of one seed still differ by an sd "
-         "of 4-17"),
+         "so what separates -181 from -147 is likely learning (an online table over a map that moves), "
+         "not resolution"),
         n_trials=5)
     mountaincar = _benchmark(
         "mountaincar", "MountainCarContinuous-v0",
