@@ -163,7 +163,8 @@ def _claims(m: dict, seeds: int) -> list[Claim]:
 
 
 def _published(envs: tuple[str, ...]) -> list[str]:
-    published = [f"- {kind.upper()} on {env_id}: {fmt(mean)}{'' if sd is None else f' ± {fmt(sd)}'} after "
+    # As published: 94.7 stays 94.7 (fmt would pad it to 94.700).
+    published = [f"- {kind.upper()} on {env_id}: {mean:g}{'' if sd is None else f' ± {sd:g}'} after "
                  f"{fmt(steps)} steps" for (kind, env_id), (mean, sd, steps) in zoo.PUBLISHED.items() if env_id in envs]
     lines = (["RL Baselines3 Zoo's published results, as published (one trained agent each; mean ± sd of its "
               "evaluation episodes):", "", *published] if published else

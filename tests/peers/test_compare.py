@@ -309,6 +309,8 @@ def test_the_benchmarks_report_quotes_the_zoo_as_published_or_says_it_has_nothin
 
     lines = benchmarks._published(("Pendulum-v1",))
     assert "- TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in lines
+    lines = benchmarks._published(("MountainCarContinuous-v0",))
+    assert "- SAC on MountainCarContinuous-v0: 94.7 after 50000 steps" in lines  # not padded to 94.700
     lines = benchmarks._published(("InvertedPendulum-v5",))
     assert lines[0] == "RL Baselines3 Zoo publishes no TD3 or SAC result for InvertedPendulum-v5."
     assert lines[-1] == "Gymnasium's reward thresholds: InvertedPendulum-v5 950."
