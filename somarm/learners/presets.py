@@ -508,7 +508,12 @@ def _benchmarks() -> tuple[Preset, ...]:
          "weightings on seeds 100-101: the cart's position at 1/8 and its velocity at 1/32 643 and 615, "
          "the position at 1/16 704 and 902, the velocity at 1/8 873 and 672; a 30x30 map over 200,000 "
          "steps (N_S = 2/(t/60000 + 1), alpha over 120,000) 612, 922 and 668 with the preset's weighting "
-         "and 701, 559 and 796 with the cart at 1/8 (seeds 100-102): none lifts the drifting trials",
+         "and 701, 559 and 796 with the cart at 1/8 (seeds 100-102): none lifts the drifting trials. A "
+         "learning rate falling over 200,000 steps instead of 20,000, 20 trials per seed at seeds 106-108: "
+         "853, 760 and 904 against the preset's 721, 838 and 804 (sd over trials 210-290), a gain that one "
+         "seed of three contradicts; over 60,000 steps (5 trials) 979, 978, 818, 830, 853 and 767 at seeds "
+         "100-105 against 999, 977, 907, 625, 998 and 647; N_S narrowing over 5,000 steps 885 and 721 at "
+         "seeds 103 and 105 but 460 at seed 100",
          "with every dimension counted alike, the map set the limit (somarm.reproduce.yardsticks, 100 episodes): "
          "the linear state feedback balances all 1,000 steps and still does with its torque rounded to the "
          "11 torques, but seen through the preset's learned map then it earned 158-189, about SOM-Q's 179, and "
