@@ -54,6 +54,8 @@ OPTIONAL: dict[str, Callable[[Context], Section]] = {
     "delayed_reward": delayed.delayed_reward, "peers": peers.peers, "benchmarks": benchmarks.benchmarks,
     **benchmarks.PARTS,
 }
+#: The parts that run Gymnasium's environments (the whole benchmarks part and each environment alone).
+GYMNASIUM_PARTS = frozenset({"benchmarks", *benchmarks.PARTS})
 
 
 def check_names(only: list[str] | None) -> list[str]:
@@ -62,7 +64,7 @@ def check_names(only: list[str] | None) -> list[str]:
     unknown = [n for n in names if n not in EXPERIMENTS and n not in OPTIONAL]
     if unknown:
         raise ValueError(f"unknown experiment(s) {', '.join(unknown)}; allowed: {', '.join([*EXPERIMENTS, *OPTIONAL])}")
-    if {"peers", "benchmarks"} & set(names) and (reason := peers_missing()):
+    if ({"peers"} | GYMNASIUM_PARTS) & set(names) and (reason := peers_missing()):
         raise ValueError(reason)
     return names
 
@@ -217,7 +219,7 @@ def _header(sections: list[Section], *, quick: bool, seeds: list[int], backend: 
     """The report's opening lines: the mode, the seeds, where rewards come from, the wall time and
     which values are this project's choices (the benchmarks part alone runs Gymnasium's own
     environments, and its seeds may be read back from an earlier run)."""
-    benchmarks_only = bool(sections) and all(s.name.startswith("benchmarks") for s in sections)
+    benchmarks_only = bool(sections) and all(s.name in GYMNASIUM_PARTS for s in sections)
     slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
     if benchmarks_only:
         where = "every return from Gymnasium's own environment"

@@ -141,6 +141,15 @@ def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoo
     assert (tmp_path / "benchmarks" / "Pendulum-v1" / "compare.png").stat().st_size > 10_000
 
 
+def test_every_benchmarks_part_asks_for_the_peers_extra_before_it_trains(monkeypatch):
+    """Without stable-baselines3 the part would train somarm's learners for minutes and then fail on TD3."""
+    monkeypatch.setattr(runner, "peers_missing", lambda: "TD3 and SAC need the peers extra")
+    for name in ("benchmarks", "benchmarks_pendulum", "benchmarks_reacher", "peers"):
+        with pytest.raises(ValueError, match="need the peers extra"):
+            runner.check_names([name])
+    assert runner.check_names(["reach2"]) == ["reach2"]
+
+
 def test_a_killed_comparison_goes_on_with_resume_keeping_its_finished_seeds(tmp_path, capsys):
     import subprocess
 
