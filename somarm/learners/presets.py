@@ -538,13 +538,17 @@ def _benchmarks() -> tuple[Preset, ...]:
          "0.95 -9.9 (seed 100)",
          "held out (seeds 0-4, 5 trials x 200,000 steps, 100 greedy episodes per trial): -9.3, -9.4, -9.3, "
          "-9.6, -8.7, mean -9.3, short of -6; 160-240 s of training per run of 5 trials on 2 busy cores. "
-         "With the grid over the whole box: -12.2, -11.7, -11.7, -12.6, -11.4, mean -11.9, what no torque earns",
-         "where it stops short (somarm.reproduce.yardsticks, 100 episodes): the torques are fine enough, since "
-         "the PD law rounded to the preset's grid earns -5.7; what is left is the state: a 20x20 map over 10 "
+         "With the grid over the whole box: -12.2, -11.7, -11.7, -12.6, -11.4, mean -11.9, about what no "
+         "torque earns (-12.0)",
+         "where it stops short (somarm.reproduce.yardsticks, 100 episodes; the learned map is one trial "
+         "of the preset at seed 0): no torque earns -12.0 and a Jacobian-transpose PD law -5.4; the torques are fine enough, since "
+         "the PD law rounded to the preset's grid earns -5.7; seen through the preset's learned map it earns "
+         "-15.7 by the nearest unit and -14.2 blended over the 3 nearest; what is left is the state: a 20x20 map over 10 "
          "observed dimensions (joint angles, target, velocities, the fingertip-to-target vector) resolves "
          "where the target lies only coarsely, and a 30x30 map gains 0.1-0.3. Maps learned on the PD law's "
          "own states (torque noise sd 0.1), the best case for a map, carry it to -7.3 with 400 units and no "
-         "further than -6.8 with 10,000 (nearest unit -7.3, blended -6.8): six dimensions vary independently "
+         "further than -6.8 with 10,000 (nearest unit/blended: -7.3/-7.5 with 400, -7.5/-7.0 with 2,500, "
+         "-7.3/-6.8 with 10,000): six dimensions vary independently "
          "(two joint angles, the target, two joint velocities). On tuning seed 100 (5 trials x 200,000 "
          "steps, against -9.8): a map settling 10 or 50 times slower, to follow the states the policy comes "
          "to visit, -10.7 and -11.2; a 40x40 map with Pendulum-v1's schedules over 500,000 steps -9.7",
