@@ -20,12 +20,17 @@ Where it differs from SB3, and why:
 - ``predict`` is greedy only: SOM-Q's exploration (a random unit, a perturbed action) belongs to
   learning, so ``deterministic=False`` is refused rather than answered with something else.
 - Observations are the environment's own; the model scales them as its task does
-  (``somarm.tasks.gym_envs``).
+  (``somarm.tasks.gym_envs``). Actions come back in the action Box's dtype.
+- Given an environment object, the model makes its own copies from its id and keywords (its time
+  limit kept, its ``render_mode`` dropped); wrappers added after ``gymnasium.make`` are refused.
+- A loaded model learns on from the saved step: its episodes start from streams of their own for that
+  step, and its curves (read back from the folder) go on where they stopped.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -35,7 +40,7 @@ import numpy as np
 from somarm import run
 from somarm.protocols import BatchedTask, Learner
 from somarm.run import RunConfig
-from somarm.run.loop import Episodes, loop
+from somarm.run.loop import EpisodeLog, Episodes, loop
 
 __all__ = ["SOMQ"]
 
@@ -50,7 +55,18 @@ def _task_name(env: Any) -> tuple[str, dict[str, Any]]:
         return "gym:" + env, {}
     spec = getattr(env, "spec", None)
     if spec is not None and getattr(spec, "id", None):
-        return "gym:" + spec.id, dict(spec.kwargs or {})
+        wrappers = [w.name for w in getattr(spec, "additional_wrappers", ()) or ()]
+        if wrappers:
+            raise ValueError(f"SOMQ makes its own copies of {spec.id} from its id and keywords, so the wrappers "
+                             f"added after gymnasium.make ({', '.join(wrappers)}) would be lost: give an "
+                             "environment without them, or its id")
+        # The copies render nothing (`somarm view` shows a model), and keep a time limit set at make.
+        kwargs = {k: v for k, v in dict(spec.kwargs or {}).items() if k != "render_mode"}
+        from gymnasium import spec as registered
+
+        if spec.max_episode_steps != registered(spec.id).max_episode_steps:
+            kwargs["max_episode_steps"] = spec.max_episode_steps
+        return "gym:" + spec.id, kwargs
     raise ValueError(f"env must be a Gymnasium id (such as 'Pendulum-v1'), a somarm task name or a registered "
                      f"Gymnasium environment, got {type(env).__name__}")
 
@@ -84,11 +100,13 @@ class SOMQ:
         self.config = config
         self.task: BatchedTask = run.make_task(config)
         self.learner: Learner = learner if learner is not None else run.make_learner(config, self.task)
-        self.task.set_step(self.learner.t)
+        self.task.continue_at(self.learner.t)  # a loaded model meets new starts, not its first ones again
         self._blocks: list[tuple[int, np.ndarray]] = []
         self._squares: list[np.ndarray] = []
         self._episodes: list[Episodes] = []
+        self._log = EpisodeLog([self.task]) if self.task.episodic else None  # episodes spanning two learn()s
         self._wall_time = 0.0
+        self._cannot_learn: str | None = None
 
     @property
     def num_timesteps(self) -> int:
@@ -101,14 +119,17 @@ class SOMQ:
         Ctrl-C stops at the end of a step and keeps what was learned.
 
         Raises:
-          ValueError: ``total_timesteps`` is not a whole number >= 1.
+          ValueError: ``total_timesteps`` is not a whole number >= 1, or the model was loaded from a
+            folder whose curves do not cover every step it took (one line).
         """
         from somarm.validation import check_int
 
         steps = check_int("total_timesteps", total_timesteps)
+        if self._cannot_learn is not None:
+            raise ValueError(self._cannot_learn)
         block = math.gcd(steps, 1000)
         curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
-                      progress=progress_bar, label=f"{self.config.task}/SOMQ")
+                      progress=progress_bar, label=f"{self.config.task}/SOMQ", episode_log=self._log)
         done = self.learner.t
         self._blocks.append((block, curves.block_means))
         self._squares.append(curves.block_sq_means)
@@ -127,7 +148,8 @@ class SOMQ:
           trial: which trial's policy answers.
 
         Returns:
-          ``(action, None)``: ``(action_dim,)`` or ``(n, action_dim)``, inside the action Box.
+          ``(action, None)``: ``(action_dim,)`` or ``(n, action_dim)``, inside the action Box, of its
+          dtype (float64 for this project's own tasks).
 
         Raises:
           ValueError: ``deterministic=False``, a wrong shape or a trial out of range (one line).
@@ -145,6 +167,8 @@ class SOMQ:
         x = self.task.scale(x)  # a Gymnasium task maps onto [0, 1]; the others keep their units
         batch = np.broadcast_to(x, (self.config.n_trials, *x.shape))
         actions = np.asarray(self.learner.predict(np.ascontiguousarray(batch)))[trial]
+        dtype = getattr(self.task, "action_dtype", np.float64)  # the Box's (float32 for most), as SB3's
+        actions = np.clip(actions.astype(dtype), self.task.action_low.astype(dtype), self.task.action_high.astype(dtype))
         return (actions[0] if single else actions), None
 
     def evaluate(self, *, seed: int | None = None) -> dict[str, Any]:
@@ -203,4 +227,31 @@ class SOMQ:
         config, learner = run.load(path)
         model = cls.__new__(cls)
         model._start(config, learner)
+        if learner.t:
+            model._read_history(Path(path))
         return model
+
+    def _read_history(self, folder: Path) -> None:
+        """The curves and wall time of the steps already taken, so that a model that learns on and is
+        saved again writes curves over all its steps. Where they cannot be read, the model still
+        predicts, evaluates and saves, and ``learn`` says why it cannot go on."""
+        try:
+            with np.load(folder / "curves.npz", allow_pickle=False) as data:
+                block = int(data["block"])
+                means, squares = np.asarray(data["block_means"], float), np.asarray(data["block_sq_means"], float)
+                names = ("episode_ends", "episode_trials", "episode_returns", "episode_lengths")
+                episodes = Episodes(*(np.asarray(data[n]) for n in names)) if self.task.episodic else None
+            wall = float(json.loads((folder / "summary.json").read_text())["wall_time_s"])
+        except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as exc:
+            self._cannot_learn = (f"{folder} holds no readable curves.npz and summary.json ({exc}); "
+                                  "a loaded model learns on only from a complete run folder")
+            return
+        if means.shape != (len(means), self.config.n_trials) or squares.shape != means.shape or \
+                block < 1 or len(means) * block != self.learner.t:
+            self._cannot_learn = (f"{folder / 'curves.npz'} covers {len(means)} blocks of {block} steps, but the "
+                                  f"learner took {self.learner.t}; a loaded model learns on only from a run "
+                                  "whose curves cover every step")
+            return
+        self._blocks, self._squares, self._wall_time = [(block, means)], [squares], wall
+        if episodes is not None:
+            self._episodes = [episodes]

@@ -47,8 +47,10 @@ def trial_ids_for(n_trials: int, trial_ids: Sequence[int] | None = None) -> np.n
     return ids.astype(np.int64)
 
 
-def trial_generators(seed: int, trial_ids: np.ndarray, purpose: str) -> list[np.random.Generator]:
-    """One independent generator per trial, derived from (seed, purpose, trial index).
+def trial_generators(seed: int, trial_ids: np.ndarray, purpose: str, *, start: int = 0) -> list[np.random.Generator]:
+    """One independent generator per trial, derived from (seed, purpose, trial index), and from
+    ``start`` where it is not 0: a run that goes on from step ``start`` of a saved learner draws from
+    streams of its own instead of replaying those it began with.
 
     Args:
       seed: the run's seed (a whole number >= 0).
@@ -64,7 +66,8 @@ def trial_generators(seed: int, trial_ids: np.ndarray, purpose: str) -> list[np.
         raise ValueError(f"unknown purpose {purpose!r}; allowed: {', '.join(PURPOSES)}")
     return [
         np.random.Generator(
-            np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES[purpose], int(i))))
+            np.random.PCG64(np.random.SeedSequence(
+                int(seed), spawn_key=(PURPOSES[purpose], int(i)) + ((int(start),) if start else ())))
         )
         for i in trial_ids
     ]
@@ -82,14 +85,16 @@ class UniformStreams:
       purpose: one of ``PURPOSES``.
       width: numbers per row (>= 1).
       block: rows drawn at a time; a speed knob only, it never changes the numbers.
+      start: a step to go on from (``trial_generators``); 0, the default, for a run from its start.
     """
 
-    def __init__(self, seed: int, trial_ids: np.ndarray, purpose: str, width: int, *, block: int = 512):
+    def __init__(self, seed: int, trial_ids: np.ndarray, purpose: str, width: int, *, block: int = 512,
+                 start: int = 0):
         if width < 1 or block < 1:
             raise ValueError(f"width and block must be >= 1, got width={width}, block={block}")
         self.width = int(width)
         self.block = int(block)
-        self._generators = trial_generators(seed, np.asarray(trial_ids), purpose)
+        self._generators = trial_generators(seed, np.asarray(trial_ids), purpose, start=start)
         self._buffer = np.empty((len(self._generators), self.block, self.width))
         self._pos = self.block  # empty: the first next() refills
 

@@ -51,3 +51,74 @@ def test_saving_into_a_folder_another_process_writes_is_refused_in_one_line(tmp_
         holder.wait()
     model.save(folder)  # the kernel freed the lock with the process
     assert (folder / "learner.npz").exists()
+
+
+def _pendulum(**kwargs) -> SOMQ:
+    return SOMQ("Pendulum-v1", seed=5, env_kwargs={"max_episode_steps": 3}, **kwargs)
+
+
+def test_learning_in_parts_records_the_same_whole_episodes_as_learning_at_once():
+    at_once, in_parts = _pendulum(), _pendulum()
+    at_once.learn(9)
+    for steps in (2, 2, 5):  # episodes of 3 steps span the parts
+        in_parts.learn(steps)
+    whole, parts = at_once._result().episodes, in_parts._result().episodes
+    assert parts.lengths.tolist() == [3, 3, 3] and parts.ends.tolist() == [3, 6, 9]
+    np.testing.assert_array_equal(parts.returns, whole.returns)
+
+
+def test_a_loaded_model_learns_on_from_new_starts_and_saves_curves_over_every_step(tmp_path):
+    model = _pendulum()
+    model.learn(6)
+    first = model.task.reset().copy()  # the task's next start, from its own streams
+    model.save(tmp_path / "a")
+    loaded = SOMQ.load(tmp_path / "a")
+    assert not np.array_equal(loaded.task.reset(), first)  # not the starts it began with
+    loaded = SOMQ.load(tmp_path / "a")
+    loaded.learn(3)
+    loaded.save(tmp_path / "b")
+    with np.load(tmp_path / "b" / "curves.npz") as data:
+        assert data["block_means"].shape[0] * int(data["block"]) == 9
+        assert data["episode_ends"].tolist() == [3, 6, 9]
+
+
+def test_a_loaded_model_whose_curves_are_damaged_predicts_but_says_why_it_cannot_learn_on(tmp_path):
+    model = _pendulum()
+    model.learn(6)
+    model.save(tmp_path / "a")
+    (tmp_path / "a" / "curves.npz").write_bytes(b"not a zip")
+    loaded = SOMQ.load(tmp_path / "a")
+    assert loaded.predict(np.zeros(3))[0].shape == (1,)
+    with pytest.raises(ValueError, match="curves.npz") as error:
+        loaded.learn(3)
+    assert "\n" not in str(error.value)
+
+
+def test_an_environment_object_keeps_its_time_limit_and_keywords_and_renders_nothing():
+    import gymnasium
+
+    env = gymnasium.make("Pendulum-v1", max_episode_steps=50, g=5.0, render_mode="rgb_array")
+    model = SOMQ(env, seed=0)
+    assert model.config.task_params == {"g": 5.0, "max_episode_steps": 50}
+    assert model.task.max_episode_steps == 50
+
+
+def test_an_environment_object_with_wrappers_added_after_make_is_refused_in_one_line():
+    import gymnasium
+    from gymnasium.wrappers import ClipAction
+
+    with pytest.raises(ValueError, match="ClipAction") as error:
+        SOMQ(ClipAction(gymnasium.make("Pendulum-v1")), seed=0)
+    assert "\n" not in str(error.value)
+
+
+def test_predicted_actions_have_the_action_box_dtype_and_lie_inside_it():
+    import gymnasium
+
+    model = _pendulum()
+    model.learn(3)
+    space = gymnasium.make("Pendulum-v1").action_space
+    action, _ = model.predict(np.array([1.0, 0.0, 0.0]))
+    assert action.dtype == space.dtype and space.contains(action)
+    batch, _ = model.predict(np.zeros((4, 3)))
+    assert batch.dtype == space.dtype and batch.shape == (4, 1)

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from somarm.streams import UniformStreams, trial_ids_for
+from somarm.streams import UniformStreams, trial_generators, trial_ids_for
 
 
 def test_trial_alone_equals_trial_in_batch():
@@ -40,3 +40,24 @@ def test_state_round_trip_continues_exactly():
 def test_bad_trial_ids(n_trials, ids, match):
     with pytest.raises(ValueError, match=match):
         trial_ids_for(n_trials, ids)
+
+
+def test_streams_that_go_on_from_a_step_are_their_own_and_step_0_is_the_start():
+    ids = np.arange(3)
+    start = [g.random(4) for g in trial_generators(7, ids, "task")]
+    again = [g.random(4) for g in trial_generators(7, ids, "task", start=0)]
+    later = [g.random(4) for g in trial_generators(7, ids, "task", start=500)]
+    np.testing.assert_array_equal(start, again)
+    assert not np.isclose(np.array(start), np.array(later)).any()
+
+
+@pytest.mark.parametrize("name", ["reach2", "reach2_obstacle"])
+def test_a_task_continued_at_a_step_meets_new_starts_and_at_step_0_the_same(name):
+    from somarm import tasks
+
+    fresh = tasks.make(name, n_trials=2, seed=3).reset()
+    same, later = tasks.make(name, n_trials=2, seed=3), tasks.make(name, n_trials=2, seed=3)
+    same.continue_at(0)
+    later.continue_at(1000)
+    np.testing.assert_array_equal(same.reset(), fresh)
+    assert later.t == 1000 and not np.isclose(later.reset(), fresh).all(axis=1).any()

@@ -24,7 +24,7 @@ from somarm.run.stopping import stop_between_steps
 from somarm.tasks.base import step_together
 from somarm.tasks.pool import single_threaded
 
-__all__ = ["Curves", "Episodes", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards"]
+__all__ = ["Curves", "EpisodeLog", "Episodes", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards"]
 
 StepHook = Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]
 
@@ -76,8 +76,12 @@ class Episodes:
             return np.where(count > 0, total / np.maximum(count, 1), np.nan)
 
 
-class _EpisodeLog:
-    """Collects the training episodes of the multi-step tasks as they end (``Episodes``)."""
+class EpisodeLog:
+    """Collects the training episodes of the multi-step tasks as they end (``Episodes``).
+
+    It holds each trial's running return and length, so one log passed to several ``loop`` calls
+    on the same tasks (``SOMQ.learn`` called again) counts an episode that spans two calls whole.
+    """
 
     def __init__(self, tasks: list[BatchedTask]) -> None:
         self.tasks = tasks
@@ -100,14 +104,20 @@ class _EpisodeLog:
                 self.returns[over] = 0.0
                 self.lengths[over] = 0
 
-    def episodes(self) -> Episodes:
-        if not self.ended:
+    def take(self) -> Episodes:
+        """The episodes that ended since the last ``take`` (their steps as ``record`` was given them)."""
+        ended, self.ended = self.ended, []
+        return self._episodes(ended)
+
+    @staticmethod
+    def _episodes(ended: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]]) -> Episodes:
+        if not ended:
             empty = np.zeros(0)
             return Episodes(empty.astype(np.int64), empty.astype(np.int64), empty, empty.astype(np.int64))
-        return Episodes(np.concatenate([np.full(len(o), s) for s, o, _, _ in self.ended]).astype(np.int64),
-                        np.concatenate([o for _, o, _, _ in self.ended]).astype(np.int64),
-                        np.concatenate([r for _, _, r, _ in self.ended]),
-                        np.concatenate([n for _, _, _, n in self.ended]).astype(np.int64))
+        return Episodes(np.concatenate([np.full(len(o), s) for s, o, _, _ in ended]).astype(np.int64),
+                        np.concatenate([o for _, o, _, _ in ended]).astype(np.int64),
+                        np.concatenate([r for _, _, r, _ in ended]),
+                        np.concatenate([n for _, _, _, n in ended]).astype(np.int64))
 
 
 def loop(
@@ -123,6 +133,7 @@ def loop(
     label: str = "",
     snapshots_at: tuple[int, ...] = (),
     lanes: list[list[int]] | None = None,
+    episode_log: EpisodeLog | None = None,
 ) -> Curves:
     """Train ``learners`` (learner i owns trials ``parts[i]`` of its task) for ``n_steps`` steps.
 
@@ -144,6 +155,8 @@ def loop(
       lanes: the tasks (indices) each thread steps, with their learners, side by side (default one
         lane of every task, in this thread); with several, each step runs either in the lanes or in
         this thread alone, whichever measures faster (``_LanePolicy``).
+      episode_log: the log of the tasks' training episodes to go on with (one made here by default);
+        the curves' ``episodes`` are those that ended in this call, at this call's steps.
 
     Returns:
       The ``Curves`` of every trial, the tasks' trials side by side in task order.
@@ -169,7 +182,7 @@ def loop(
     bar = Progress(n_steps, label=label, enabled=progress)
     last_mean = float("nan")
     episodic = [t.episodic for t in tasks]  # multi-step episodes (reach2_obstacle, gym:ID): EpisodicTasks
-    log = _EpisodeLog(tasks) if any(episodic) else None
+    log = episode_log if episode_log is not None else (EpisodeLog(tasks) if any(episodic) else None)
     # The lanes other than the first run in their own threads; each owns its tasks and learners,
     # so every trial sees the same arithmetic in the same order as with one lane. Whether a step
     # is faster in lanes or in this thread alone (all tasks, one physics call on the batch's own
@@ -244,7 +257,7 @@ def loop(
     bar.close(step, last_mean)
     done = step // block
     return Curves(block_means[:done], block_sq_means[:done], step, wall_time, interrupted, snapshots,
-                  None if log is None else log.episodes())
+                  None if log is None else log.take())
 
 
 class _LanePolicy:

@@ -18,7 +18,7 @@ import numpy as np
 from dm_control.rl import control
 from dm_env import specs
 
-from somarm.streams import UniformStreams, trial_ids_for
+from somarm.streams import UniformStreams, trial_generators, trial_ids_for
 from somarm.tasks.record import BACKENDS, OWN_BACKENDS
 from somarm.validation import real_array
 
@@ -106,6 +106,9 @@ class TaskBase:
         task maps them onto [0, 1])."""
         return np.asarray(observations, dtype=np.float64)
 
+    #: The dtype of the actions the task's environment takes (a Gymnasium task's is its Box's).
+    action_dtype: np.dtype = np.dtype(np.float64)
+
     def set_step(self, t: int) -> None:
         """Set the step counter (e.g. to a trained learner's t, to evaluate in its phase).
 
@@ -115,6 +118,26 @@ class TaskBase:
         if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or t < 0:
             raise ValueError(f"t must be a whole number >= 0, got {t!r}")
         self.t = int(t)
+
+    def continue_at(self, t: int) -> None:
+        """Go on from step ``t``, as a model loaded from its run folder does (``SOMQ.load``): the step
+        counter is set, and the task's own random numbers (starts, goals, reset seeds) come from streams
+        keyed by ``t`` as well, so a continued run meets new starts instead of replaying those it began
+        with. At ``t = 0`` this is ``set_step(0)``.
+
+        Raises:
+          ValueError: ``t`` is not a whole number >= 0.
+        """
+        self.set_step(t)
+        if self.t:
+            self._restart_streams(self.t)
+
+    def _restart_streams(self, start: int) -> None:
+        """Draw the task's random numbers from streams keyed by ``start`` (``continue_at``). Here for the
+        multi-step tasks, whose trials reset from generators of their own (``_generators``) when their
+        episode is over (``_over``): every trial starts a new episode from the new streams."""
+        self._generators = trial_generators(self.seed, self.trial_ids, "task", start=start)
+        self._over[:] = True
 
 
 class OneStepTask(TaskBase):
@@ -161,6 +184,9 @@ class OneStepTask(TaskBase):
         """Next observation of every trial, shape ``(n_trials, obs_dim)``."""
         self._observations = self.observations_from(self._streams.next())
         return self._observations.copy()
+
+    def _restart_streams(self, start: int) -> None:
+        self._streams = UniformStreams(self.seed, self.trial_ids, "task", self.uniform_width, start=start)
 
     def step(self, actions: np.ndarray) -> np.ndarray:
         """Rewards ``(n_trials,)`` for actions ``(n_trials, action_dim)``; advances ``t``.

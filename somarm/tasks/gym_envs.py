@@ -37,7 +37,7 @@ from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
-__all__ = ["PREFIX", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "KNOWN_RANGES",
+__all__ = ["PREFIX", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "EVALUATION_STEPS", "KNOWN_RANGES",
            "WIDENED", "estimate_bounds"]
 
 #: What a Gymnasium task name starts with.
@@ -47,6 +47,12 @@ _OWN = ("observation_low", "observation_high")
 #: Random-action steps behind a bounds estimate, and the quantiles taken.
 _ESTIMATE_STEPS = 5000
 _QUANTILES = (0.01, 0.99)
+#: An observation bound this large counts as none (some environments give +-float32's largest value for
+#: an unbounded dimension): scaled from it, every observation would sit at 0.5, so it is estimated.
+_UNBOUNDED = 1e6
+#: Steps after which a greedy evaluation episode is cut (as a truncation) where the environment sets
+#: no time limit of its own.
+EVALUATION_STEPS = 1000
 
 #: The benchmarks with presets of their own (``somarm.learners.presets``) and default steps; any
 #: other id trains with the generic ``gym`` preset for ``_DEFAULT_STEPS`` steps.
@@ -159,11 +165,14 @@ def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
         action_high = np.asarray(env.action_space.high, dtype=np.float64)
         if not (np.isfinite(action_low).all() and np.isfinite(action_high).all()):
             raise ValueError(f"{name} has an unbounded action Box; somarm's action map needs finite bounds")
+        observation_low = np.asarray(env.observation_space.low, dtype=np.float64)
+        observation_high = np.asarray(env.observation_space.high, dtype=np.float64)
         return {
-            "observation_low": np.asarray(env.observation_space.low, dtype=np.float64),
-            "observation_high": np.asarray(env.observation_space.high, dtype=np.float64),
+            "observation_low": np.where(observation_low <= -_UNBOUNDED, -np.inf, observation_low),
+            "observation_high": np.where(observation_high >= _UNBOUNDED, np.inf, observation_high),
             "action_low": action_low,
             "action_high": action_high,
+            "action_dtype": np.dtype(env.action_space.dtype),
             "max_episode_steps": env.spec.max_episode_steps if env.spec is not None else None,
             "mujoco": hasattr(env.unwrapped, "model") and type(env.unwrapped.model).__name__ == "MjModel",
         }
@@ -253,6 +262,7 @@ class GymTask(TaskBase):
         self.observation_low = np.zeros(self.scale_low.size)
         self.observation_high = np.ones(self.scale_low.size)
         self.action_low, self.action_high = facts["action_low"], facts["action_high"]
+        self.action_dtype = facts["action_dtype"]
         self.max_episode_steps = facts["max_episode_steps"]
         self._generators = trial_generators(seed, self.trial_ids, "task")
         self._envs = [params.make_env() for _ in range(self.n_trials)]
@@ -358,6 +368,8 @@ class GymTask(TaskBase):
         """Whole episodes of ``policy`` (scaled observations ``(m, obs_dim)`` -> actions ``(m, action_dim)``)
         from the reset seeds ``starts`` ``(m,)``, all in lockstep, each to its termination or time limit.
 
+        An environment without a time limit has its episodes cut after ``EVALUATION_STEPS`` steps.
+
         Returns:
           ``{"length": (m,) steps, "returns": (m,) undiscounted, "terminated": (m,) bools}``; with
           ``paths`` also ``"path"``: each episode's raw observations, ``(m, longest + 1, obs_dim)``,
@@ -373,6 +385,7 @@ class GymTask(TaskBase):
         length = np.zeros(m, dtype=np.int64)
         returns = np.zeros(m)
         terminated = np.zeros(m, dtype=bool)
+        limit = self.max_episode_steps or EVALUATION_STEPS
         trace = [self.unscale(current)] if paths else None
         while running.any():
             actions = np.clip(np.asarray(policy(current), dtype=np.float64), self.action_low, self.action_high)
@@ -382,7 +395,7 @@ class GymTask(TaskBase):
                 returns[i] += reward
                 length[i] += 1
                 terminated[i] = term
-                running[i] = not (term or trunc)
+                running[i] = not (term or trunc) and length[i] < limit
             if paths:
                 trace.append(self.unscale(current))
         out = {"length": length, "returns": returns, "terminated": terminated}

@@ -47,6 +47,27 @@ class _NeedsAPackage(gymnasium.Env):
 gymnasium.register("somarmtest/Constant-v0", entry_point=_Constant, max_episode_steps=2)
 gymnasium.register("somarmtest/Ending-v0", entry_point=lambda: _Constant(end=2), max_episode_steps=50)
 gymnasium.register("somarmtest/NeedsAPackage-v0", entry_point=_NeedsAPackage)
+gymnasium.register("somarmtest/NoLimit-v0", entry_point=_Constant, max_episode_steps=None)
+
+
+class _Drifting(gymnasium.Env):
+    """A point pushed by its action, its Box bounded by float32's largest value, as some environments
+    declare an unbounded dimension."""
+
+    observation_space = spaces.Box(-3.4e38, 3.4e38, (1,), np.float32)
+    action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.x = float(self.np_random.uniform(-1.0, 1.0))
+        return np.array([self.x], np.float32), {}
+
+    def step(self, action):
+        self.x += 0.1 * float(action[0])
+        return np.array([self.x], np.float32), -abs(self.x), False, False, {}
+
+
+gymnasium.register("somarmtest/HugeBox-v0", entry_point=_Drifting, max_episode_steps=20)
 
 
 def _one_unit(gamma):
@@ -236,3 +257,21 @@ def test_a_widened_dimension_keeps_its_middle_and_spans_its_factor_times_the_ran
     np.testing.assert_allclose((high - low) / (plain_high - plain_low), [32.0, 1.0, 32.0, 2.0])
     np.testing.assert_allclose(low + high, plain_low + plain_high, atol=1e-12)
     np.testing.assert_array_equal(plain_low[:2], [-1.0, -0.2])  # the rail and the ending angle
+
+
+def test_a_box_bound_as_large_as_float32_allows_is_estimated_like_an_infinite_one():
+    config = RunConfig(task="gym:somarmtest/HugeBox-v0", n_steps=100, block=100, seed=2).resolved()
+    low, high = config.task_params["observation_low"], config.task_params["observation_high"]
+    assert -3.0 < low[0] < -0.5 and 0.5 < high[0] < 3.0  # the random walk's quantiles, not +-3.4e38
+    observations = run.make_task(config).reset()
+    assert 0.05 < observations.min() and observations.max() < 0.95  # spread out, not all at 0.5
+
+
+def test_greedy_episodes_of_an_environment_without_a_time_limit_are_cut(monkeypatch):
+    from somarm.tasks import gym_envs
+
+    monkeypatch.setattr(gym_envs, "EVALUATION_STEPS", 7)
+    task = tasks.make("gym:somarmtest/NoLimit-v0")
+    assert task.max_episode_steps is None
+    episodes = task.run_episodes(lambda x: np.zeros((len(x), 1)), np.arange(3))
+    assert episodes["length"].tolist() == [7, 7, 7] and episodes["returns"].tolist() == [7.0, 7.0, 7.0]
