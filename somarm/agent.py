@@ -32,6 +32,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -62,9 +64,15 @@ def _task_name(env: Any) -> tuple[str, dict[str, Any]]:
                              "environment without them, or its id")
         # The copies render nothing (`somarm view` shows a model), and keep a time limit set at make.
         kwargs = {k: v for k, v in dict(spec.kwargs or {}).items() if k != "render_mode"}
+        from gymnasium import error
         from gymnasium import spec as registered
 
-        if spec.max_episode_steps != registered(spec.id).max_episode_steps:
+        try:
+            default_limit = registered(spec.id).max_episode_steps
+        except error.Error:
+            raise ValueError(f"{spec.id} is not a registered Gymnasium environment; SOMQ makes its copies "
+                             "from the registry (gymnasium.register it, or give a registered id)") from None
+        if spec.max_episode_steps != default_limit:
             kwargs["max_episode_steps"] = spec.max_episode_steps
         return "gym:" + spec.id, kwargs
     raise ValueError(f"env must be a Gymnasium id (such as 'Pendulum-v1'), a somarm task name or a registered "
@@ -242,15 +250,16 @@ class SOMQ:
                 names = ("episode_ends", "episode_trials", "episode_returns", "episode_lengths")
                 episodes = Episodes(*(np.asarray(data[n]) for n in names)) if self.task.episodic else None
             wall = float(json.loads((folder / "summary.json").read_text())["wall_time_s"])
-        except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as exc:
+        except (OSError, EOFError, KeyError, TypeError, ValueError, zipfile.BadZipFile, zlib.error) as exc:
             self._cannot_learn = (f"{folder} holds no readable curves.npz and summary.json ({exc}); "
                                   "a loaded model learns on only from a complete run folder")
             return
         if means.shape != (len(means), self.config.n_trials) or squares.shape != means.shape or \
                 block < 1 or len(means) * block != self.learner.t:
             self._cannot_learn = (f"{folder / 'curves.npz'} covers {len(means)} blocks of {block} steps, but the "
-                                  f"learner took {self.learner.t}; a loaded model learns on only from a run "
-                                  "whose curves cover every step")
+                                  f"learner took {self.learner.t} (a run stopped mid-block keeps no curve of "
+                                  "that block); a loaded model learns on only from a run whose curves cover "
+                                  "every step")
             return
         self._blocks, self._squares, self._wall_time = [(block, means)], [squares], wall
         if episodes is not None:

@@ -68,9 +68,9 @@ def test_learning_in_parts_records_the_same_whole_episodes_as_learning_at_once()
 
 
 def test_a_loaded_model_learns_on_from_new_starts_and_saves_curves_over_every_step(tmp_path):
+    first = _pendulum().task.reset()  # the run's first start
     model = _pendulum()
     model.learn(6)
-    first = model.task.reset().copy()  # the task's next start, from its own streams
     model.save(tmp_path / "a")
     loaded = SOMQ.load(tmp_path / "a")
     assert not np.array_equal(loaded.task.reset(), first)  # not the starts it began with
@@ -86,11 +86,23 @@ def test_a_loaded_model_whose_curves_are_damaged_predicts_but_says_why_it_cannot
     model = _pendulum()
     model.learn(6)
     model.save(tmp_path / "a")
-    (tmp_path / "a" / "curves.npz").write_bytes(b"not a zip")
-    loaded = SOMQ.load(tmp_path / "a")
-    assert loaded.predict(np.zeros(3))[0].shape == (1,)
-    with pytest.raises(ValueError, match="curves.npz") as error:
-        loaded.learn(3)
+    whole = (tmp_path / "a" / "curves.npz").read_bytes()
+    for damaged in (b"not a zip", whole[: len(whole) // 2]):  # garbage, and a file cut short
+        (tmp_path / "a" / "curves.npz").write_bytes(damaged)
+        loaded = SOMQ.load(tmp_path / "a")
+        assert loaded.predict(np.zeros(3))[0].shape == (1,)
+        with pytest.raises(ValueError, match="curves.npz") as error:
+            loaded.learn(3)
+        assert "\n" not in str(error.value)
+
+
+def test_an_environment_object_from_an_unregistered_spec_is_refused_in_one_line():
+    import gymnasium
+    from gymnasium.envs.classic_control import PendulumEnv
+
+    env = gymnasium.make(gymnasium.envs.registration.EnvSpec("somarmtest/Unregistered-v0", entry_point=PendulumEnv))
+    with pytest.raises(ValueError, match="not a registered Gymnasium environment") as error:
+        SOMQ(env, seed=0)
     assert "\n" not in str(error.value)
 
 

@@ -273,5 +273,13 @@ def test_greedy_episodes_of_an_environment_without_a_time_limit_are_cut(monkeypa
     monkeypatch.setattr(gym_envs, "EVALUATION_STEPS", 7)
     task = tasks.make("gym:somarmtest/NoLimit-v0")
     assert task.max_episode_steps is None
-    episodes = task.run_episodes(lambda x: np.zeros((len(x), 1)), np.arange(3))
+    asked = []
+
+    def policy(x):  # a guard: without the cut the episodes would never end
+        asked.append(1)
+        if len(asked) > 100:
+            raise AssertionError("the greedy episodes were not cut")
+        return np.zeros((len(x), 1))
+
+    episodes = task.run_episodes(policy, np.arange(3))
     assert episodes["length"].tolist() == [7, 7, 7] and episodes["returns"].tolist() == [7.0, 7.0, 7.0]
