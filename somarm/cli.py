@@ -242,7 +242,7 @@ def _cmd_compare(args) -> int:
     config = compare.CompareConfig(
         task=args.task,
         learners=tuple(k.strip() for k in args.learners.split(",") if k.strip()),
-        samples=args.samples,
+        samples=args.samples or compare.default_samples(args.task),
         peer_samples=args.peer_samples,
         seeds=args.seeds,
         seed=args.seed,
@@ -334,7 +334,9 @@ def _parser() -> argparse.ArgumentParser:
     comp.add_argument("--learners", default="somq,somq+,motoric,tabular,td3,sac",
                       help="comma-separated, from somq, somq+ (the task's + preset with the interpolated response), "
                            "motoric, tabular, td3, sac (default: all six)")
-    comp.add_argument("--samples", type=whole_number, default=10_000, help="training samples (default 10000)")
+    comp.add_argument("--samples", type=whole_number,
+                      help="training samples of somarm's learners (default: a gym:ID's run length, the steps of its "
+                           "benchmark preset; else 10000)")
     comp.add_argument("--peer-samples", type=whole_number,
                       help="training samples of td3 and sac (default: RL Baselines3 Zoo's budget for a gym:ID it "
                            "tunes, else --samples)")

@@ -5,8 +5,9 @@ Every learner trains on the same task with the same seeds (seed s: the task's ob
 policy is scored on the same fresh observations (the evaluation stream of ``--eval-seed``). The
 error is minus the mean reward (a distance for the arms, ``|X - landing|`` for the throws). Wall
 time counts training only, not the scoring. somarm's learners use the task's preset (tabular: its
-own defaults); TD3 and SAC use SB3's defaults through ``somarm.peers.gym``, with torch on one thread
-(somarm's learners use one core too), and every setting is written into ``compare.json``.
+own defaults); TD3 and SAC use RL Baselines3 Zoo's tuned settings and budget for a ``gym:ID`` the Zoo
+covers, else SB3's defaults (TD3 with Gaussian action noise 0.1; ``somarm.peers.zoo``), with torch on
+one thread (somarm's learners use one core too), and every setting is written into ``compare.json``.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from somarm.io import atomic_write_json
 from somarm.run import evaluation
 
 __all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "ladder", "check", "compare", "peers_missing",
-           "peer_budget", "task_defaults"]
+           "peer_budget", "default_samples", "task_defaults"]
 
 OURS = ("somq", "somq+", "motoric", "tabular")
 PEERS = ("td3", "sac")
@@ -253,6 +254,16 @@ def _peer_env(config: CompareConfig, params: dict[str, Any]):
         return gymnasium.make(config.task[4:], **_peer_params(params)), config.task[4:] + " (its own observations and actions)"
     return (gymnasium.make(env_id(config.task), **params),
             env_id(config.task) + " (actions in [-1, 1] mapped to the task's box)")
+
+
+def default_samples(task: str) -> int:
+    """somarm's learners' samples when none are given: a ``gym:ID``'s run length (its benchmark
+    preset's steps, which the held-out results use), else 10,000."""
+    if task.startswith("gym:"):
+        from somarm import tasks
+
+        return tasks.record(task).n_steps
+    return 10_000
 
 
 def peer_budget(kind: str, config: CompareConfig) -> int:

@@ -32,9 +32,39 @@ PUBLISHED: dict[tuple[str, str], tuple[float, float, int]] = {
 #: Gymnasium's reward thresholds (``env.spec.reward_threshold``) where it sets one, as registered.
 THRESHOLDS = {"InvertedPendulum-v5": 950.0, "Reacher-v5": -3.75, "MountainCarContinuous-v0": 90.0}
 
-#: Zoo keys that are not keywords of the algorithm: read here (budget, noise) or not applicable.
+#: Zoo keys that are not keywords of the algorithm: read here (budget, noise) or not applied (below).
 _NOT_KEYWORDS = ("n_timesteps", "policy", "noise_type", "noise_std", "normalize", "env_wrapper", "callback",
                  "frame_stack", "n_envs")
+#: Zoo keys that change the environment or the training loop rather than the algorithm. The peers train
+#: one copy of the environment as Gymnasium makes it, so these are not applied; an entry that sets one
+#: says so in its source (``"rl-zoo3 2.x, without its normalize"``), which ``compare.json`` keeps.
+_NOT_APPLIED = ("normalize", "env_wrapper", "callback", "frame_stack", "n_envs")
+
+
+class LinearSchedule:
+    """The Zoo's ``lin_X`` learning rate: X times the fraction of training still to go (SB3 calls it
+    with that fraction, 1 at the start and 0 at the end). Written as the Zoo writes it."""
+
+    def __init__(self, initial: float):
+        self.initial = float(initial)
+
+    def __call__(self, progress_remaining: float) -> float:
+        return progress_remaining * self.initial
+
+    def __repr__(self) -> str:
+        return f"lin_{self.initial:g}"
+
+
+def _schedule(value: Any) -> Any:
+    """A Zoo number, or its ``lin_X`` text read as a ``LinearSchedule``; any other text is refused."""
+    if isinstance(value, str) and value.startswith("lin_"):
+        try:
+            return LinearSchedule(float(value[4:]))
+        except ValueError:
+            pass
+    if isinstance(value, str):
+        raise ValueError(value)
+    return value
 
 
 def _zoo_folder() -> Path | None:
@@ -98,9 +128,15 @@ def settings(kind: str, env_id: str, action_dim: int) -> tuple[dict[str, Any], i
     keywords = {key: value for key, value in entry.items() if key not in _NOT_KEYWORDS}
     if isinstance(keywords.get("policy_kwargs"), str):
         keywords["policy_kwargs"] = _policy_kwargs(keywords["policy_kwargs"])
-    for key in ("learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma"):
+    if "learning_rate" in keywords:
+        try:
+            keywords["learning_rate"] = _schedule(keywords["learning_rate"])
+        except ValueError:
+            raise ValueError(f"the Zoo's learning_rate for {kind} on {env_id} is {keywords['learning_rate']!r}; "
+                             "this reader takes a number or lin_NUMBER") from None
+    for key in ("buffer_size", "learning_starts", "batch_size", "tau", "gamma"):
         if isinstance(keywords.get(key), str):
-            raise ValueError(f"the Zoo's {key} for {kind} on {env_id} is a schedule ({keywords[key]!r}); "
+            raise ValueError(f"the Zoo's {key} for {kind} on {env_id} is {keywords[key]!r}; "
                              "this reader takes numbers")
     noise, std = entry.get("noise_type"), entry.get("noise_std")
     if noise == "normal":
@@ -111,4 +147,6 @@ def settings(kind: str, env_id: str, action_dim: int) -> tuple[dict[str, Any], i
         raise ValueError(f"the Zoo's noise_type {noise!r} for {kind} on {env_id} is not one this reader knows")
     from importlib.metadata import version
 
-    return keywords, int(entry["n_timesteps"]), f"rl-zoo3 {version('rl-zoo3')}"
+    skipped = [key for key in _NOT_APPLIED if key in entry and not (key == "n_envs" and entry[key] == 1)]
+    source = f"rl-zoo3 {version('rl-zoo3')}" + (f", without its {', '.join(skipped)}" if skipped else "")
+    return keywords, int(entry["n_timesteps"]), source

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Claim", "Section", "merge_seeds", "render", "claim_record"]
+__all__ = ["Claim", "Section", "merge_seeds", "render", "claim_record", "TITLE", "BENCHMARKS_TITLE"]
 
 
 @dataclass
@@ -130,15 +130,21 @@ def _json_number(x) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def render(sections: list[Section], *, header: list[str], out_dir: Path, seeds: list[int] | None = None) -> str:
-    """The whole REPORT.md: header, the claims table, then one part per experiment.
+#: The report's title, and the title of a report of Gymnasium's benchmarks alone.
+TITLE = "somarm: reproduction of Smith (2002)"
+BENCHMARKS_TITLE = "somarm: SOM-Q on Gymnasium's benchmarks beside TD3 and SAC"
+
+
+def render(sections: list[Section], *, header: list[str], out_dir: Path, seeds: list[int] | None = None,
+           title: str = TITLE) -> str:
+    """The whole REPORT.md: the title, header, the claims table, then one part per experiment.
 
     ``out_dir`` is the folder REPORT.md is written to: every figure lies under it and is linked
     relative to it (``figures/x.png``), never by a path that names the folder. ``seeds``: the seeds a
     merged section's counts were measured at.
     """
     lines = [
-        "# somarm: reproduction of Smith (2002)",
+        f"# {title}",
         "",
         *header,
         "",

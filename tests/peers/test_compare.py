@@ -6,6 +6,7 @@ import sys
 import numpy as np
 import pytest
 
+from somarm import tasks
 from somarm.cli import main
 from somarm.peers import compare
 from somarm.reproduce import runner
@@ -118,6 +119,22 @@ def test_the_zoos_entries_become_sb3_keywords_and_other_environments_take_sb3s_d
     assert zoo.settings("sac", "Reacher-v5", 2)[:2] == ({}, None)
     assert compare.peer_budget("td3", compare.CompareConfig(task="gym:Pendulum-v1")) == 20_000
     assert compare.peer_budget("sac", compare.CompareConfig(task="gym:Reacher-v5", samples=777)) == 777
+    # Without --samples, somarm's learners train for a gym:ID's run length, the budget its results use.
+    assert compare.default_samples("gym:Pendulum-v1") == tasks.record("gym:Pendulum-v1").n_steps == 500_000
+    assert compare.default_samples("reach2") == 10_000
+
+
+def test_zoo_schedules_are_read_and_what_is_not_applied_is_named():
+    """The Zoo's ``lin_X`` learning rates fall linearly to 0; keys that change the environment (here
+    observation normalising) are not applied, and the source says which."""
+    from somarm.peers import zoo
+
+    keywords, budget, source = zoo.settings("sac", "HumanoidBulletEnv-v0", 17)
+    rate = keywords["learning_rate"]
+    assert repr(rate) == "lin_0.0003" and rate(1.0) == pytest.approx(3e-4) and rate(0.25) == pytest.approx(7.5e-5)
+    assert source.startswith("rl-zoo3 ") and source.endswith(", without its normalize")
+    assert "normalize" not in keywords and budget > 0
+    assert "without" not in zoo.settings("sac", "MountainCarContinuous-v0", 1)[2]
 
 
 def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoos_numbers(tmp_path):
@@ -133,7 +150,8 @@ def test_the_benchmarks_part_is_optional_and_reports_returns_targets_and_the_zoo
     for kind in ("SOM-Q", "SOM-Q+ (interpolated)", "Motoric Map", "tabular (fixed grid)", "SB3 TD3", "SB3 SAC"):
         assert f"| Pendulum-v1 | {kind} | " in report
     assert "TD3 on Pendulum-v1: -152 ± 90 after 20000 steps" in report and "MountainCarContinuous" not in report
-    # Its header speaks of Gymnasium's environments, not of the paper's arms.
+    # Its title and header speak of Gymnasium's environments, not of the paper's arms.
+    assert report.startswith("# somarm: SOM-Q on Gymnasium's benchmarks beside TD3 and SAC\n")
     assert "every return from Gymnasium's own environment" in report and "Arm lengths" not in report
     assert "Wall time of this run" in report and "the paper ran no Gymnasium environment" in report
     merged = json.loads((tmp_path / "benchmarks" / "Pendulum-v1" / "compare.json").read_text())
