@@ -547,7 +547,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "observed dimensions (joint angles, target, velocities, the fingertip-to-target vector) resolves "
          "where the target lies only coarsely, and a 30x30 map gains 0.1-0.3. Maps learned on the PD law's "
          "own states (torque noise sd 0.1), the best case for a map, carry it to -7.3 with 400 units and no "
-         "further than -6.8 with 10,000 (nearest unit/blended: -7.3/-7.5 with 400, -7.5/-7.0 with 2,500, "
+         "further than -6.8 with 10,000 (nearest unit/blended: -7.3/-7.5 with 400, -7.5/-6.9 with 2,500, "
          "-7.3/-6.8 with 10,000): six dimensions vary independently "
          "(two joint angles, the target, two joint velocities). On tuning seed 100 (5 trials x 200,000 "
          "steps, against -9.8): a map settling 10 or 50 times slower, to follow the states the policy comes "
