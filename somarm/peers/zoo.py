@@ -32,13 +32,12 @@ PUBLISHED: dict[tuple[str, str], tuple[float, float, int]] = {
 #: Gymnasium's reward thresholds (``env.spec.reward_threshold``) where it sets one, as registered.
 THRESHOLDS = {"InvertedPendulum-v5": 950.0, "Reacher-v5": -3.75, "MountainCarContinuous-v0": 90.0}
 
-#: Zoo keys that are not keywords of the algorithm: read here (budget, noise) or not applied (below).
-_NOT_KEYWORDS = ("n_timesteps", "policy", "noise_type", "noise_std", "normalize", "env_wrapper", "callback",
-                 "frame_stack", "n_envs")
 #: Zoo keys that change the environment or the training loop rather than the algorithm. The peers train
 #: one copy of the environment as Gymnasium makes it, so these are not applied; an entry that sets one
 #: says so in its source (``"rl-zoo3 2.x, without its normalize"``), which ``compare.json`` keeps.
 _NOT_APPLIED = ("normalize", "env_wrapper", "callback", "frame_stack", "n_envs")
+#: Zoo keys that are not keywords of the algorithm: read here (budget, noise) or not applied.
+_NOT_KEYWORDS = ("n_timesteps", "policy", "noise_type", "noise_std") + _NOT_APPLIED
 
 
 class LinearSchedule:
@@ -55,16 +54,21 @@ class LinearSchedule:
         return f"lin_{self.initial:g}"
 
 
-def _schedule(value: Any) -> Any:
-    """A Zoo number, or its ``lin_X`` text read as a ``LinearSchedule``; any other text is refused."""
-    if isinstance(value, str) and value.startswith("lin_"):
-        try:
+def _learning_rate(value: Any, kind: str, env_id: str) -> Any:
+    """A Zoo learning rate: a number as it is, ``lin_X`` as a ``LinearSchedule``.
+
+    Raises:
+      ValueError: any other text (one line).
+    """
+    if not isinstance(value, str):
+        return value
+    try:
+        if value.startswith("lin_"):
             return LinearSchedule(float(value[4:]))
-        except ValueError:
-            pass
-    if isinstance(value, str):
-        raise ValueError(value)
-    return value
+    except ValueError:
+        pass
+    raise ValueError(f"the Zoo's learning_rate for {kind} on {env_id} is {value!r}; "
+                     "this reader takes a number or lin_NUMBER")
 
 
 def _zoo_folder() -> Path | None:
@@ -129,11 +133,7 @@ def settings(kind: str, env_id: str, action_dim: int) -> tuple[dict[str, Any], i
     if isinstance(keywords.get("policy_kwargs"), str):
         keywords["policy_kwargs"] = _policy_kwargs(keywords["policy_kwargs"])
     if "learning_rate" in keywords:
-        try:
-            keywords["learning_rate"] = _schedule(keywords["learning_rate"])
-        except ValueError:
-            raise ValueError(f"the Zoo's learning_rate for {kind} on {env_id} is {keywords['learning_rate']!r}; "
-                             "this reader takes a number or lin_NUMBER") from None
+        keywords["learning_rate"] = _learning_rate(keywords["learning_rate"], kind, env_id)
     for key in ("buffer_size", "learning_starts", "batch_size", "tau", "gamma"):
         if isinstance(keywords.get(key), str):
             raise ValueError(f"the Zoo's {key} for {kind} on {env_id} is {keywords[key]!r}; "

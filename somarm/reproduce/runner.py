@@ -194,8 +194,10 @@ def _write(
     out: Path, sections: list[Section], *, quick: bool, seeds: list[int], backend: str, total: float,
     complete: bool,
 ) -> None:
-    header = _header(sections, quick=quick, seeds=seeds, backend=backend, total=total, complete=complete)
-    title = BENCHMARKS_TITLE if _benchmarks_only(sections) else TITLE
+    benchmarks_only = bool(sections) and all(s.name in GYMNASIUM_PARTS for s in sections)
+    header = _header(sections, quick=quick, seeds=seeds, backend=backend, total=total, complete=complete,
+                     benchmarks_only=benchmarks_only)
+    title = BENCHMARKS_TITLE if benchmarks_only else TITLE
     atomic_write_text(out / "REPORT.md", render(sections, header=header, out_dir=out, seeds=seeds, title=title))
     atomic_write_json(
         out / "claims.json",
@@ -215,17 +217,11 @@ def _write(
     )
 
 
-def _benchmarks_only(sections: list[Section]) -> bool:
-    """Whether every part of the report runs Gymnasium's environments (the benchmarks parts)."""
-    return bool(sections) and all(s.name in GYMNASIUM_PARTS for s in sections)
-
-
 def _header(sections: list[Section], *, quick: bool, seeds: list[int], backend: str, total: float,
-            complete: bool) -> list[str]:
+            complete: bool, benchmarks_only: bool) -> list[str]:
     """The report's opening lines: the mode, the seeds, where rewards come from, the wall time and
     which values are this project's choices (the benchmarks part alone runs Gymnasium's own
     environments, and its seeds may be read back from an earlier run)."""
-    benchmarks_only = _benchmarks_only(sections)
     slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
     if benchmarks_only:
         where = "every return from Gymnasium's own environment"
