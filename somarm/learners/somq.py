@@ -32,7 +32,7 @@ from typing import Literal
 
 import numpy as np
 
-from somarm.learners import _kernels, interpolation
+from somarm.learners import _kernels, groups, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
@@ -107,6 +107,19 @@ class SOMQConfig(ConfigBase):
     middle, in (0, 1] (1: the ends on the bounds). A narrower grid gives finer torques where balancing
     and reaching need them; the units still move over the whole box if lambda_A > 0."""
 
+    input_groups: str = "all"
+    """Which observed dimensions each input map sees (``somarm.learners.groups``): ``all`` (one map over
+    every dimension, the paper's), ``pairs`` (one map per pair of dimensions), ``singles`` (one per
+    dimension), ``chunks:K`` (consecutive runs of K dimensions in index order) or index lists such as
+    ``0,1;2,3`` (0-based, ';' between maps). Every map has ``input_shape`` units and its own Q-table over
+    the one action map; their Q-values add, as tile coding's tilings do. A rule of thumb: groups of 2-3
+    dimensions that vary together, a 10x10 map each."""
+
+    k_nearest: int = 1
+    """Input units per map that answer for a state, blended by tapered inverse distance, when acting and
+    when learning (1: the winning unit alone, the paper's). Any value but 1, or grouped maps, runs
+    ``somarm.learners.groups``' kernels; the paper's model is ``input_groups=all`` with ``k_nearest=1``."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -122,6 +135,15 @@ class SOMQConfig(ConfigBase):
         if span != 1.0 and self.action_init != "grid":
             raise ValueError(f"grid_span applies only with action_init='grid', got action_init={self.action_init!r}")
         object.__setattr__(self, "grid_span", span)
+        object.__setattr__(self, "input_groups", groups.check_groups(self.input_groups))
+        if isinstance(self.k_nearest, bool) or not isinstance(self.k_nearest, (int, np.integer)) or self.k_nearest < 1:
+            raise ValueError(f"k_nearest must be a whole number >= 1, got {self.k_nearest!r}")
+        object.__setattr__(self, "k_nearest", int(self.k_nearest))
+
+    @property
+    def grouped(self) -> bool:
+        """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
+        return self.input_groups != "all" or self.k_nearest != 1
 
 
 def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray, span: float = 1.0) -> np.ndarray:
@@ -179,6 +201,12 @@ class SOMQ(MapLearner):
         """Both maps' grid coordinates, and per trial the weights of both maps and Q (see ``LearnerBase``)."""
         n_s, n_a = int(np.prod(config.input_shape)), int(np.prod(config.action_shape))
         n_floats = grid_floats(config.input_shape) + grid_floats(config.action_shape)
+        if config.grouped:  # G maps of n_s units over the widest group's dimensions, G tables
+            table = groups.group_table(groups.parse_groups(config.input_groups, obs_dim))
+            n_maps, width = table.shape
+            n_floats += n_trials * (n_maps * n_s * (width + n_a) + n_a * action_dim + 2 * n_maps * config.k_nearest)
+            return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
+                    f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
         return (f"a somq learner with input_shape={shape_text(config.input_shape)}, action_shape="
                 f"{shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
@@ -191,15 +219,30 @@ class SOMQ(MapLearner):
         self.action_weights = np.empty((self.n_trials, n_a, self.action_dim))
         spread = grid_actions(cfg.action_shape, self.action_low, self.action_high, cfg.grid_span) \
             if cfg.action_init == "grid" else None
+        if cfg.grouped:
+            self._groups = groups.group_table(groups.parse_groups(cfg.input_groups, self.obs_dim))
+            n_maps = self._groups.shape[0]
+            self.input_weights = np.zeros((self.n_trials, n_maps * n_s, self._groups.shape[1]))
+            self._group_units = np.zeros((self.n_trials, n_maps, cfg.k_nearest), dtype=np.int64)
+            self._phi = np.zeros((self.n_trials, n_maps, cfg.k_nearest))
+            self._action_grid_shape = np.array(cfg.action_shape, dtype=np.int64)
+        else:
+            self._group_units = np.zeros((self.n_trials, 1, 1), dtype=np.int64)
+            self._phi = np.zeros((self.n_trials, 1, 1))
         for trial, rng in enumerate(self._initial_generators()):
             # Table 1 order: input weights first, then action weights, from one child stream.
-            self.input_weights[trial] = self._initial_input_weights(rng)
+            if cfg.grouped:
+                self._initial_group_weights(self.input_weights[trial], rng)
+            else:
+                self.input_weights[trial] = self._initial_input_weights(rng)
             if spread is not None:
                 self.action_weights[trial] = spread
                 continue
             span = self.action_high - self.action_low
             self.action_weights[trial] = self.action_low + span * rng.random((n_a, self.action_dim))
-        self.q = np.full((self.n_trials, n_s, n_a), cfg.q_init)
+        # Grouped maps: each table starts at q_init / G, so that their sum starts at q_init.
+        n_rows, share = (self.input_weights.shape[1], self._groups.shape[0]) if cfg.grouped else (n_s, 1)
+        self.q = np.full((self.n_trials, n_rows, n_a), cfg.q_init / share if share > 1 else cfg.q_init)
         self._open_streams(row_width(cfg, self.action_dim))
         self._interpolated = cfg.response == "interpolated"
         self._wrap = self.action_periodic & cfg.periodic_actions  # all False: the paper's clipped box
@@ -208,6 +251,18 @@ class SOMQ(MapLearner):
         self._outputs = np.zeros((self.n_trials, self.action_dim))
         self._shifted = np.zeros(self.n_trials, dtype=np.bool_)  # stays all False for the winner response
 
+    def _initial_group_weights(self, weights: np.ndarray, rng: np.random.Generator) -> None:
+        """Each map's units drawn uniformly over its dimensions' bounds (or ``input_init``), map after
+        map; one map over every dimension in order draws what the paper's one map draws."""
+        low, high = self.observation_low, self.observation_high
+        if self.config.input_init is not None:
+            low = np.full_like(low, self.config.input_init[0])
+            high = np.full_like(high, self.config.input_init[1])
+        n_s = self.input_grid.shape[0]
+        for g, row in enumerate(self._groups):
+            dims = row[row >= 0]
+            weights[g * n_s:(g + 1) * n_s, :dims.size] = low[dims] + (high[dims] - low[dims]) * rng.random((n_s, dims.size))
+
     @property
     def periodic_dimensions(self) -> np.ndarray:
         """The action dimensions this learner wraps round (``periodic_actions`` and the task's declaration)."""
@@ -215,9 +270,11 @@ class SOMQ(MapLearner):
 
     _STATE_ARRAYS = ("input_weights", "action_weights", "q")
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
-    _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted",)
-    # Files saved before ``_shifted`` existed load with it all False: nothing shifts (the winner response).
-    _OPTIONAL_ARRAYS = ("_shifted",)
+    # ``_group_units`` and ``_phi``: each map's k nearest units and their weights (grouped maps only).
+    _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted", "_group_units", "_phi")
+    # Files saved before these existed load with ``_shifted`` all False (nothing shifts: the winner
+    # response) and the paper's one map (no groups).
+    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi")
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -239,6 +296,15 @@ class SOMQ(MapLearner):
         rows = self._streams.next()
         values = self._current()
         self._observations[...] = x
+        if self.config.grouped:
+            groups.act_kernel(
+                self._observations, self.input_weights, self.action_weights, self.q, self._groups,
+                self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
+                self.action_high, self._wrap, self.config.noise == "gaussian", self._interpolated,
+                self._action_grid_shape, self._group_units, self._phi, self._units, self._actions,
+            )
+            self._pending = True
+            return self._actions.copy()
         if self._interpolated:
             interpolation.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, rows, values["p"],
@@ -273,6 +339,17 @@ class SOMQ(MapLearner):
         if x_next is not self._observations and not _kernels.all_finite(x_next):
             raise ValueError("next_observations must be finite, got NaN or inf")
         values = self._current()
+        if self.config.grouped:
+            groups.learn_kernel(
+                r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
+                self._units, self._actions, self.input_weights, self.action_weights, self.q, self._groups,
+                self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
+                values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
+                self.action_high, self._wrap,
+            )
+            self._pending = False
+            self.t += 1
+            return
         _kernels.learn_kernel(
             r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
             self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
@@ -293,6 +370,9 @@ class SOMQ(MapLearner):
           ``(input_winners, action_units)``, each of the leading shape of ``observations``.
         """
         x = self._check_observations(observations, allow_many=True)
+        if self.config.grouped:  # the first map's nearest unit, and the best unit of the summed Q
+            units, first = self._grouped_greedy(x)
+            return first, units
         input_winners = winners(self.input_weights, x)
         index = np.arange(self.n_trials).reshape((-1,) + (1,) * (input_winners.ndim - 1))
         return input_winners, np.argmax(self.q[index, input_winners], axis=-1)
@@ -306,6 +386,14 @@ class SOMQ(MapLearner):
         Returns:
           ``(n_trials, action_dim)`` or ``(n_trials, n_obs, action_dim)``.
         """
+        if self.config.grouped:
+            x = self._check_observations(observations, allow_many=True)
+            many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
+            out = np.empty((self.n_trials, many.shape[1], self.action_dim))
+            groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self._groups,
+                                  self.config.k_nearest, self._interpolated, self._action_grid_shape,
+                                  self.action_low, self.action_high, self._wrap, out)
+            return out.reshape(x.shape[:-1] + (self.action_dim,))
         if self._interpolated:
             x = self._check_observations(observations, allow_many=True)
             many = x.reshape(self.n_trials, -1, self.obs_dim)
@@ -317,3 +405,11 @@ class SOMQ(MapLearner):
         _, units = self.greedy_units(observations)
         index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))
         return self.action_weights[index, units]
+
+    def _grouped_greedy(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grouped maps: the greedy action unit and the first map's nearest unit of each observation."""
+        many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
+        units = np.empty(many.shape[:2], dtype=np.int64)
+        first = np.empty(many.shape[:2], dtype=np.int64)
+        groups.greedy_kernel(many, self.input_weights, self.q, self._groups, self.config.k_nearest, units, first)
+        return units.reshape(x.shape[:-1]), first.reshape(x.shape[:-1])

@@ -1,0 +1,58 @@
+"""Score SOM-Q settings on a benchmark's tuning seeds, as the benchmarks part scores them.
+
+One trial per seed, the environment's preset changed by ``--set KEY=VALUE``, trained for ``--samples``
+and scored at each rung of ``--rungs`` by the greedy return over ``--episodes`` fresh episodes (the reset
+seeds and the observation scaling of the seed itself, as ``somarm compare --seed S --seeds 1`` would).
+Prints one JSON line per seed. For choosing settings on seeds 100-199 only.
+
+    python scripts/tune_benchmark.py gym:Reacher-v5 --seeds 100,101 --set input_groups=pairs --set input_shape=5x5
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from somarm.learners import make, presets
+from somarm.peers import compare
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("task")
+    parser.add_argument("--seeds", default="100", help="comma-separated tuning seeds (100-199)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--samples", type=int, default=None, help="default: the task's run length")
+    parser.add_argument("--rungs", default="", help="comma-separated sample counts scored on the way")
+    parser.add_argument("--episodes", type=int, default=50)
+    parser.add_argument("--response", default=None, help="winner or interpolated (default: the preset's)")
+    args = parser.parse_args()
+    preset, steps = compare.task_defaults(args.task)
+    samples = args.samples or steps
+    rungs = sorted({int(r) for r in args.rungs.split(",") if r} | {samples})
+    overrides = dict(item.split("=", 1) for item in args.set)
+    if args.response:
+        overrides["response"] = args.response
+    settings = presets.get(preset).with_overrides(overrides)
+    for seed in (int(s) for s in args.seeds.split(",")):
+        if seed < 100:
+            raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
+        config = compare.CompareConfig(task=args.task, learners=("somq",), samples=samples, seeds=1, seed=seed,
+                                       episodes=args.episodes, eval_seed=seed)
+        params = compare._params(config)
+        task = compare._task(config, seed, params)
+        score = compare._Scorer(config, params)
+        learner = make("somq", settings, **compare._bounds(task), seed=seed)
+        done, wall, scores = 0, 0.0, {}
+        for rung in rungs:
+            start = time.perf_counter()
+            compare._train_ours(task, learner, rung - done)
+            wall += time.perf_counter() - start
+            done = rung
+            scores[rung] = (round(score(lambda x, model=learner: model.predict(x[None])[0]), 2), round(wall, 1))
+        print(json.dumps({"seed": seed, "set": overrides, "scores": scores}), flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,392 @@
+"""Input maps over groups of observed dimensions whose Q-values add, each answering with its k nearest units.
+
+The paper's SOM-Q has one input map over every observed dimension, and one winning unit names the
+state. That map's units must cover the joint space of all the dimensions that vary on their own, so
+past four or so of them a map of any size resolves each coarsely. Here the state is seen instead by
+G maps, one per group of dimensions (``input_groups``), as tile coding sees it through several
+tilings, and each map answers with a blend of its k nearest units (``k_nearest``):
+
+- features: in map g the ``k`` units nearest the group's part of the observation ``x_g`` get the
+  tapered inverse-distance weights ``phi_i = 1/d_i - 1/d_(k+1)`` (``d`` Euclidean, ``d_(k+1)`` the
+  next unit's distance), normalised to sum to 1 (``k = 1``: the winner alone, weight 1). A unit's
+  weight falls to 0 before it leaves the nearest set, so the blend varies continuously.
+- Q: every map keeps its own table ``(n_units, n_action_units)`` over ONE shared action map, and
+  ``Q(s, a) = sum_g sum_i phi_gi Q_g(u_gi, a)``; the greedy action unit is the argmax of that sum
+  (ties as the paper's: the row's tie-break number when acting, the lowest index when predicting).
+- learning (steps 6 to 9): the target is ``r + gamma max_a Q(s', a)`` with the features of s' taken
+  before this step's map update. Step 7 (the action map) compares the target with the summed
+  ``Q(s, a_k)``. Step 8 moves each map's part of the sum: with ``R_g(a)`` the sum less map g's part,
+  unit m near winner u_gi moves ``Q_g(m, a) += (alpha / G) phi_gi psi_S(m) psi_A(a) (target - R_g(a) -
+  Q_g(m, a))`` over its own neighbourhood (the winning pair alone without neighbourhood Q-learning).
+  alpha / G, as tile coding divides its step by the tilings: every map moves its part towards what
+  the others leave unexplained, so at the winners the sum moves by alpha times the error, as one
+  map's value does. With one group over every dimension in order and k = 1 these are the paper's
+  steps exactly (R = 0). Step 9 pulls each map towards its part of the observation round its
+  nearest unit.
+- the interpolated response: the greedy action unit's weights moved, along each axis of the action
+  map's grid, to the top of the parabola through the summed Q of the unit and its two grid
+  neighbours (at most half a grid step): torques between the grid's, from the values learned.
+
+Layout, map after map: ``input_weights (n_trials, G * n_units, width)`` (width the largest group's
+size; a smaller group's weights are 0 beyond its size) and ``q (n_trials, G * n_units, n_action_units)``;
+map g's units are rows ``g * n_units`` to ``(g + 1) * n_units - 1``. Each table starts at ``q_init / G``,
+so the sum starts at ``q_init``. Random numbers: the paper's row per step per trial.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numba
+import numpy as np
+
+from somarm.learners._kernels import _pull, _pull_action, neighbourhood_row, perturbation, wrapped
+
+__all__ = ["GROUPINGS", "check_groups", "parse_groups", "group_table", "features", "act_kernel", "learn_kernel",
+           "predict_kernel", "greedy_kernel"]
+
+#: The named groupings of ``input_groups`` (besides index lists and ``chunks:K``).
+GROUPINGS = ("all", "pairs", "singles")
+
+
+def check_groups(text: str) -> str:
+    """``input_groups`` checked for form, before the observation's size is known.
+
+    Raises:
+      ValueError: one line naming the forms allowed.
+    """
+    allowed = ("input_groups must be all, pairs, singles, chunks:K (K >= 1) or index lists such as "
+               f"'0,1;2,3' (0-based, ';' between maps), got {text!r}")
+    if not isinstance(text, str):
+        raise ValueError(allowed)
+    text = text.strip()
+    if text in GROUPINGS:
+        return text
+    if text.startswith("chunks:"):
+        size = text.partition(":")[2]
+        if not size.isdigit() or int(size) < 1:
+            raise ValueError(allowed)
+        return text
+    try:
+        groups = [[int(v) for v in part.split(",")] for part in text.split(";")]
+    except ValueError:
+        raise ValueError(allowed) from None
+    if any(v < 0 for group in groups for v in group):
+        raise ValueError(allowed)
+    for group in groups:
+        if len(set(group)) != len(group):
+            raise ValueError(f"input_groups: dimension repeated within the map {','.join(map(str, group))} of {text!r}")
+    return text
+
+
+def parse_groups(text: str, obs_dim: int) -> list[list[int]]:
+    """The observed dimensions each map sees, ``[[0, 1], [2, 3], ...]``, for ``obs_dim`` dimensions.
+
+    ``all``: one map over every dimension; ``pairs``: one per pair ``(i, j)``, i < j (one map if
+    obs_dim is 1); ``singles``: one per dimension; ``chunks:K``: consecutive runs of K in index order
+    (the last one shorter); index lists as written.
+
+    Raises:
+      ValueError: a form ``check_groups`` refuses, or an index outside ``0 .. obs_dim - 1`` (one line).
+    """
+    text = check_groups(text)
+    dims = list(range(obs_dim))
+    if text == "all":
+        return [dims]
+    if text == "pairs":
+        return [list(p) for p in itertools.combinations(dims, 2)] or [dims]
+    if text == "singles":
+        return [[d] for d in dims]
+    if text.startswith("chunks:"):
+        size = int(text.partition(":")[2])
+        return [dims[i:i + size] for i in range(0, obs_dim, size)]
+    groups = [[int(v) for v in part.split(",")] for part in text.split(";")]
+    bad = sorted({v for group in groups for v in group if v >= obs_dim})
+    if bad:
+        raise ValueError(f"input_groups={text!r} names dimension(s) {', '.join(map(str, bad))}, but the "
+                         f"observation has {obs_dim} (0 .. {obs_dim - 1})")
+    return groups
+
+
+def group_table(groups: list[list[int]]) -> np.ndarray:
+    """The groups as a ``(G, width)`` index table, -1 beyond each group's size (the kernels' form)."""
+    width = max(len(group) for group in groups)
+    table = np.full((len(groups), width), -1, dtype=np.int64)
+    for g, group in enumerate(groups):
+        table[g, :len(group)] = group
+    return table
+
+
+@numba.njit(cache=True, nogil=True)
+def features(x, weights, groups, k, units, phi, part, order, squared):
+    """Each map's ``k`` nearest units to its part of ``x`` and their tapered weights, in place.
+
+    Shapes: x ``(obs_dim,)``, weights ``(G * n_units, width)`` (one trial), groups ``(G, width)``,
+    units (rows of ``weights``) and phi ``(G, k)``; part ``(width,)``, order and squared ``(k + 1,)``
+    are scratch.
+    """
+    n_groups, width = groups.shape
+    n_units = weights.shape[0] // n_groups
+    size = min(k + 1, n_units)
+    for g in range(n_groups):
+        for i in range(width):
+            part[i] = x[groups[g, i]] if groups[g, i] >= 0 else 0.0
+        count = 0
+        worst = np.inf
+        for m in range(g * n_units, (g + 1) * n_units):
+            total = 0.0
+            for i in range(width):
+                diff = part[i] - weights[m, i]
+                total += diff * diff
+            if count < size or total < worst:
+                slot = count if count < size else size - 1
+                while slot > 0 and squared[slot - 1] > total:  # ties keep the lower index first
+                    squared[slot] = squared[slot - 1]
+                    order[slot] = order[slot - 1]
+                    slot -= 1
+                squared[slot] = total
+                order[slot] = m
+                if count < size:
+                    count += 1
+                worst = squared[count - 1] if count == size else np.inf
+        _tapered(order, squared, k, size, units[g], phi[g])
+
+
+@numba.njit(cache=True, nogil=True)
+def _tapered(order, squared, k, size, units, phi):
+    """The weights ``1/d_i - 1/d_(k+1)`` of the k nearest, normalised; the nearest alone where it sits on x."""
+    n = min(k, size)
+    for i in range(k):
+        units[i] = order[min(i, n - 1)]
+        phi[i] = 0.0
+    if n == 1 or squared[0] == 0.0:
+        phi[0] = 1.0
+        return
+    beyond = 1.0 / np.sqrt(squared[n]) if size > n else 0.0
+    total = 0.0
+    for i in range(n):
+        phi[i] = 1.0 / np.sqrt(squared[i]) - beyond
+        total += phi[i]
+    if total <= 0.0:  # the k nearest and the next all equally far: the nearest alone
+        for i in range(n):
+            phi[i] = 0.0
+        phi[0] = 1.0
+        return
+    for i in range(n):
+        phi[i] /= total
+
+
+@numba.njit(cache=True, nogil=True)
+def _summed(q, units, phi, values):
+    """``values[a] = sum_g sum_i phi_gi q[u_gi, a]`` for every action unit a (one trial's q)."""
+    for a in range(q.shape[1]):
+        values[a] = 0.0
+    for g in range(units.shape[0]):
+        for i in range(units.shape[1]):
+            if phi[g, i] != 0.0:
+                for a in range(q.shape[1]):
+                    values[a] += phi[g, i] * q[units[g, i], a]
+
+
+@numba.njit(cache=True, nogil=True)
+def _parabola_shift(values, unit, shape, weights, out):
+    """Add to ``out`` the shift of action unit ``unit`` to the top of the parabola through the summed Q
+    of it and its two grid neighbours, along each axis of the action grid ``shape`` (at most half a step)."""
+    cols = shape[1] if shape.shape[0] == 2 else 1
+    index = (unit // cols, unit - (unit // cols) * cols)
+    for axis in range(shape.shape[0]):
+        stride = cols if axis == 0 else 1
+        place = index[axis]
+        if place == 0 or place == shape[axis] - 1:
+            continue  # an edge unit: no parabola
+        low, high = values[unit - stride], values[unit + stride]
+        curve = low - 2.0 * values[unit] + high
+        if curve >= 0.0:
+            continue
+        f = min(max(0.5 * (low - high) / curve, -0.5), 0.5)
+        for i in range(out.shape[0]):
+            out[i] += 0.5 * f * (weights[unit + stride, i] - weights[unit - stride, i])
+
+
+@numba.njit(cache=True, nogil=True)
+def _greedy(values, tie):
+    """The best action unit; among equals the one ``tie`` in [0, 1) picks (-1: the lowest index)."""
+    top = values[0]
+    for a in range(1, values.shape[0]):
+        if values[a] > top:
+            top = values[a]
+    if tie < 0.0:
+        for a in range(values.shape[0]):
+            if values[a] == top:
+                return a
+    n_tied = 0
+    for a in range(values.shape[0]):
+        if values[a] == top:
+            n_tied += 1
+    pick = min(int(tie * n_tied), n_tied - 1)
+    for a in range(values.shape[0]):
+        if values[a] == top:
+            if pick == 0:
+                return a
+            pick -= 1
+    return 0
+
+
+@numba.njit(cache=True, nogil=True)
+def act_kernel(observations, input_weights, action_weights, q, groups, k, rows, p, epsilon, low, high, wrap,
+               gaussian, interpolated, action_shape, units, phi, chosen, actions):
+    """Steps 1 to 5 for every trial: fills ``units``/``phi`` ``(n_trials, G, k)``, ``chosen`` ``(n_trials,)``
+    and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring)."""
+    n_a = q.shape[2]
+    values = np.empty(n_a)
+    part = np.empty(groups.shape[1])
+    order = np.empty(k + 1, dtype=np.int64)
+    squared = np.empty(k + 1)
+    for trial in range(observations.shape[0]):
+        row = rows[trial]
+        features(observations[trial], input_weights[trial], groups, k, units[trial], phi[trial], part, order, squared)
+        exploring = row[0] < p
+        if exploring:
+            unit = min(int(row[1] * n_a), n_a - 1)
+        else:
+            _summed(q[trial], units[trial], phi[trial], values)
+            unit = _greedy(values, row[2])
+        out = actions[trial]
+        for i in range(out.shape[0]):
+            out[i] = action_weights[trial, unit, i]
+        if interpolated and not exploring:
+            _parabola_shift(values, unit, action_shape, action_weights[trial], out)
+        for i in range(out.shape[0]):
+            value = out[i] + perturbation(row, i, gaussian) * epsilon[i]
+            out[i] = wrapped(value, low[i], high[i]) if wrap[i] else min(max(value, low[i]), high[i])
+        chosen[trial] = unit
+
+
+@numba.njit(cache=True, nogil=True)
+def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
+                 input_weights, action_weights, q, groups, k, alpha, lambda_s, lambda_a, n_s, n_a, offsets_s,
+                 offsets_a, neighbourhood_q, low, high, wrap):
+    """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring)."""
+    n_groups, width = groups.shape
+    n_units = q.shape[1] // n_groups
+    n_actions = q.shape[2]
+    values = np.empty(n_actions)
+    parts = np.zeros((n_groups, n_actions))
+    psi_s = np.empty(n_units)
+    psi_a = np.empty(n_actions)
+    part = np.empty(width)
+    order = np.empty(k + 1, dtype=np.int64)
+    squared = np.empty(k + 1)
+    next_units = np.empty((n_groups, k), dtype=np.int64)
+    next_phi = np.empty((n_groups, k))
+    step = alpha / n_groups
+    wrapping = False
+    for i in range(wrap.shape[0]):
+        wrapping = wrapping or wrap[i]
+    for trial in range(rewards.shape[0]):
+        table = q[trial]
+        a_k = chosen[trial]
+        target = rewards[trial]
+        if bootstrap[trial]:
+            features(next_observations[trial], input_weights[trial], groups, k, next_units, next_phi, part, order,
+                     squared)
+            _summed(table, next_units, next_phi, values)
+            top = values[0]
+            for a in range(1, n_actions):
+                if values[a] > top:
+                    top = values[a]
+            target = target + gamma * top
+        # Each map's part of the sum at every action unit, and the sum.
+        for a in range(n_actions):
+            values[a] = 0.0
+        for g in range(n_groups):
+            for a in range(n_actions):
+                parts[g, a] = 0.0
+            for i in range(k):
+                if phi[trial, g, i] != 0.0:
+                    for a in range(n_actions):
+                        parts[g, a] += phi[trial, g, i] * table[units[trial, g, i], a]
+            for a in range(n_actions):
+                values[a] += parts[g, a]
+        neighbourhood_row(offsets_a, a_k, n_a, psi_a)
+        # Step 7: the shared action map learns only if the perturbed action looks like an improvement.
+        if target > values[a_k]:
+            if wrapping:
+                _pull_action(action_weights[trial], actions[trial], lambda_a, psi_a, wrap, low, high)
+            else:
+                _pull(action_weights[trial], actions[trial], lambda_a, psi_a)
+        # Step 8: each map moves its part towards what the other maps leave unexplained.
+        for g in range(n_groups):
+            first = g * n_units
+            for i in range(k):
+                weight = phi[trial, g, i]
+                if weight == 0.0:
+                    continue
+                centre = units[trial, g, i]
+                if not neighbourhood_q:
+                    value = table[centre, a_k]
+                    rest = values[a_k] - parts[g, a_k]
+                    table[centre, a_k] = value + step * weight * (target - rest - value)
+                    continue
+                neighbourhood_row(offsets_s, centre - first, n_s, psi_s)
+                for m in range(n_units):
+                    if psi_s[m] > 0.0:
+                        a_m = step * weight * psi_s[m]
+                        for a in range(n_actions):
+                            if psi_a[a] > 0.0:
+                                value = table[first + m, a]
+                                rest = values[a] - parts[g, a]
+                                table[first + m, a] = value + a_m * psi_a[a] * (target - rest - value)
+        # Step 9: each map moves towards its part of the observation round its nearest unit.
+        for g in range(n_groups):
+            first = g * n_units
+            for i in range(width):
+                part[i] = observations[trial, groups[g, i]] if groups[g, i] >= 0 else 0.0
+            neighbourhood_row(offsets_s, units[trial, g, 0] - first, n_s, psi_s)
+            _pull(input_weights[trial, first:first + n_units], part, lambda_s, psi_s)
+
+
+@numba.njit(cache=True, nogil=True)
+def predict_kernel(observations, input_weights, action_weights, q, groups, k, interpolated, action_shape, low,
+                   high, wrap, out):
+    """Greedy actions of ``observations (n_trials, n_obs, obs_dim)`` into ``out (n_trials, n_obs, action_dim)``:
+    the best summed Q, ties to the lowest index, the parabola's shift with the interpolated response."""
+    n_groups = groups.shape[0]
+    values = np.empty(q.shape[2])
+    part = np.empty(groups.shape[1])
+    order = np.empty(k + 1, dtype=np.int64)
+    squared = np.empty(k + 1)
+    units = np.empty((n_groups, k), dtype=np.int64)
+    phi = np.empty((n_groups, k))
+    for trial in range(observations.shape[0]):
+        for n in range(observations.shape[1]):
+            features(observations[trial, n], input_weights[trial], groups, k, units, phi, part, order, squared)
+            _summed(q[trial], units, phi, values)
+            unit = _greedy(values, -1.0)
+            action = out[trial, n]
+            for i in range(action.shape[0]):
+                action[i] = action_weights[trial, unit, i]
+            if interpolated:
+                _parabola_shift(values, unit, action_shape, action_weights[trial], action)
+                for i in range(action.shape[0]):
+                    value = action[i]
+                    action[i] = wrapped(value, low[i], high[i]) if wrap[i] else min(max(value, low[i]), high[i])
+
+
+@numba.njit(cache=True, nogil=True)
+def greedy_kernel(observations, input_weights, q, groups, k, units_out, first_out):
+    """The greedy action unit (ties to the lowest index) and the first map's nearest unit of
+    ``observations (n_trials, n_obs, obs_dim)``, into ``units_out``/``first_out`` ``(n_trials, n_obs)``."""
+    n_groups = groups.shape[0]
+    values = np.empty(q.shape[2])
+    part = np.empty(groups.shape[1])
+    order = np.empty(k + 1, dtype=np.int64)
+    squared = np.empty(k + 1)
+    units = np.empty((n_groups, k), dtype=np.int64)
+    phi = np.empty((n_groups, k))
+    for trial in range(observations.shape[0]):
+        for n in range(observations.shape[1]):
+            features(observations[trial, n], input_weights[trial], groups, k, units, phi, part, order, squared)
+            _summed(q[trial], units, phi, values)
+            units_out[trial, n] = _greedy(values, -1.0)
+            first_out[trial, n] = units[0, 0]

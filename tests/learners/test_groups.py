@@ -1,0 +1,151 @@
+import numpy as np
+import pytest
+from somq_cases import small_config
+
+from somarm.learners import groups
+from somarm.learners.schedules import InverseDecay, Schedule
+from somarm.learners.somq import SOMQ, SOMQConfig
+
+BOX4 = dict(observation_low=[0.0, -1.0, 0.0, -2.0], observation_high=[1.0, 1.0, 2.0, 2.0],
+            action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
+
+
+def _drive(learner, steps, seed=5, gamma_next=True):
+    """Random observations and rewards (one stream for every trial count), acting and learning."""
+    rng = np.random.default_rng(seed)
+    low, high = learner.observation_low, learner.observation_high
+    for _ in range(steps):
+        x = low + (high - low) * rng.random((1, low.size))
+        x = np.repeat(x, learner.n_trials, axis=0)
+        actions = learner.act(x)
+        r = -np.abs(actions).sum(axis=1) + x[:, 0]
+        nxt = np.repeat(low + (high - low) * rng.random((1, low.size)), learner.n_trials, axis=0)
+        learner.learn(r, nxt, np.zeros(learner.n_trials, dtype=bool) if gamma_next else True)
+
+
+@pytest.mark.parametrize("neighbourhood_q", [True, False])
+@pytest.mark.parametrize("gamma", [0.0, 0.7])
+def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(neighbourhood_q, gamma):
+    paper = small_config((3, 4), neighbourhood_q, gamma)
+    grouped = paper.with_changes({"input_groups": "0,1,2,3"})
+    assert grouped.grouped and not paper.grouped
+    a, b = SOMQ(paper, n_trials=2, seed=3, **BOX4), SOMQ(grouped, n_trials=2, seed=3, **BOX4)
+    np.testing.assert_array_equal(a.input_weights, b.input_weights)
+    _drive(a, 120)
+    _drive(b, 120)
+    for name in ("input_weights", "action_weights", "q"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    x = np.random.default_rng(0).random((2, 7, 4))
+    np.testing.assert_array_equal(a.predict(x), b.predict(x))
+    np.testing.assert_array_equal(a.greedy_units(x)[1], b.greedy_units(x)[1])
+
+
+@pytest.mark.parametrize("changes", [{"input_groups": "pairs"}, {"k_nearest": 3},
+                                     {"input_groups": "0,2;1,3", "k_nearest": 2, "response": "interpolated"}])
+def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
+    config = small_config((3, 3), True, 0.5).with_changes(changes)
+    batch = SOMQ(config, n_trials=3, seed=9, **BOX4)
+    alone = SOMQ(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
+    _drive(batch, 80)
+    _drive(alone, 80)
+    for name in ("input_weights", "action_weights", "q"):
+        np.testing.assert_array_equal(getattr(batch, name)[2], getattr(alone, name)[0])
+
+
+def test_groupings_name_the_dimensions_each_map_sees():
+    assert groups.parse_groups("all", 3) == [[0, 1, 2]]
+    assert groups.parse_groups("pairs", 3) == [[0, 1], [0, 2], [1, 2]]
+    assert groups.parse_groups("singles", 2) == [[0], [1]]
+    assert groups.parse_groups("chunks:2", 5) == [[0, 1], [2, 3], [4]]
+    assert groups.parse_groups("0,3; 1", 4) == [[0, 3], [1]]
+    np.testing.assert_array_equal(groups.group_table([[0, 3], [1]]), [[0, 3], [1, -1]])
+
+
+@pytest.mark.parametrize("text, match", [("two", "input_groups must be"), ("chunks:0", "input_groups must be"),
+                                         ("0,0", "repeated"), ("0,-1", "input_groups must be")])
+def test_a_bad_grouping_is_refused_in_one_line(text, match):
+    with pytest.raises(ValueError, match=match):
+        SOMQConfig(input_groups=text)
+
+
+def test_a_dimension_the_observation_lacks_is_named():
+    with pytest.raises(ValueError, match=r"dimension\(s\) 7, but the observation has 4"):
+        SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="0,7"), **BOX4)
+    with pytest.raises(ValueError, match="k_nearest must be"):
+        SOMQConfig(k_nearest=0)
+
+
+def test_k_nearest_weights_are_tapered_and_sum_to_one():
+    config = SOMQConfig(input_shape=(4,), action_shape=(2,), k_nearest=2, lambda_s=0.0)
+    learner = SOMQ(config, observation_low=[0.0], observation_high=[3.0], action_low=[0.0], action_high=[1.0])
+    learner.input_weights[0, :, 0] = [0.0, 1.0, 2.0, 3.0]
+    learner.act([[1.25]])  # nearest 1 (0.25), 2 (0.75), then 0 (1.25): 1/0.25 - 1/1.25 = 3.2, 1/0.75 - 0.8
+    expected = np.array([3.2, 1 / 0.75 - 0.8])
+    np.testing.assert_array_equal(learner._group_units[0, 0], [1, 2])
+    np.testing.assert_allclose(learner._phi[0, 0], expected / expected.sum())
+    learner.learn([0.0])
+    learner.act([[2.0]])  # on a unit: that unit alone
+    np.testing.assert_array_equal(learner._phi[0, 0], [1.0, 0.0])
+
+
+def test_tables_start_at_a_share_of_q_init_so_the_sum_starts_at_it():
+    learner = SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="singles", q_init=8.0), **BOX4)
+    assert learner.q.shape == (1, 12, 3) and np.all(learner.q == 2.0)
+    assert learner.input_weights.shape == (1, 12, 1)
+
+
+def test_interpolated_response_moves_to_the_top_of_the_parabola():
+    config = SOMQConfig(input_shape=(1,), action_shape=(5,), input_groups="singles", response="interpolated",
+                        action_init="grid", p=0.0, epsilon=0.0)
+    learner = SOMQ(config, observation_low=[0.0], observation_high=[1.0], action_low=[-1.0], action_high=[1.0])
+    learner.q[0, 0] = [0.0, 1.0, 2.0, 1.5, 0.0]  # unit 2 (at 0); parabola through 1, 2, 1.5 tops at +0.1 steps
+    np.testing.assert_allclose(learner.predict([[0.3]]), [[0.5 * (1.0 - 1.5) / (1.0 - 4.0 + 1.5) * 0.5]])
+    plain = SOMQ(config.with_changes({"response": "winner"}), observation_low=[0.0], observation_high=[1.0],
+                 action_low=[-1.0], action_high=[1.0])
+    plain.q[...] = learner.q
+    np.testing.assert_array_equal(plain.predict([[0.3]]), [[0.0]])
+
+
+def test_save_and_load_continue_exactly(tmp_path):
+    config = small_config((3,), True, 0.5).with_changes({"input_groups": "pairs", "k_nearest": 2})
+    a = SOMQ(config, n_trials=2, seed=4, **BOX4)
+    _drive(a, 30)
+    a.act(np.full((2, 4), 0.5))
+    a.save(tmp_path / "l.npz")
+    b = SOMQ.load(tmp_path / "l.npz")
+    for learner in (a, b):
+        learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
+        _drive(learner, 10)
+    for name in ("input_weights", "action_weights", "q"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+def _planted_sum(input_groups, steps, seed):
+    """Two independent one-dimensional problems whose rewards add: action dimension i is best at
+    +0.5 where observation i > 0.5 and at -0.5 below, each a 2-unit grid; returns the greedy
+    policy's share of right torques over fresh observations."""
+    config = SOMQConfig(
+        input_shape=(2,), action_shape=(2, 2), action_init="grid", grid_span=0.5, alpha=Schedule(0.5),
+        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
+        p=Schedule(1.0, InverseDecay(500.0), 0.1), epsilon=Schedule(0.0), input_groups=input_groups)
+    learner = SOMQ(config, n_trials=4, seed=seed, observation_low=[0.0, 0.0], observation_high=[1.0, 1.0],
+                   action_low=[-1.0, -1.0], action_high=[1.0, 1.0])
+    learner.input_weights[:] = np.array([[0.25], [0.75], [0.25], [0.75]]) if input_groups == "singles" else (
+        np.array([[0.25, 0.25], [0.75, 0.75]]))
+    rng = np.random.default_rng(seed)
+    for _ in range(steps):
+        x = rng.random((4, 2))
+        a = learner.act(x)
+        right = np.where(x > 0.5, 0.5, -0.5)
+        learner.learn(-np.abs(a - right).sum(axis=1))
+    x = rng.random((4, 500, 2))
+    return float(np.mean(np.sign(learner.predict(x)) == np.where(x > 0.5, 1.0, -1.0)))
+
+
+def test_maps_whose_values_add_solve_two_independent_problems_one_map_of_two_units_cannot():
+    # The two problems' quadrants need 4 states; one map of 2 units over both dimensions holds 2, two maps
+    # of 2 units (one per dimension) hold every combination through their sum.
+    grouped = _planted_sum("singles", 3000, 1)
+    single = _planted_sum("all", 3000, 1)
+    assert grouped >= 0.99, grouped
+    assert single <= 0.8, single
