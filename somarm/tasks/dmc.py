@@ -1,0 +1,165 @@
+"""The DeepMind Control Suite as Gymnasium environments: the tasks named ``dmc:DOMAIN-TASK``.
+
+``SuiteEnv("reacher", "easy")`` is one suite task behind Gymnasium's ``Env`` API, so that the batched
+Gymnasium task, ``SOMQ`` and Stable-Baselines3 all step the suite's own physics:
+
+- the observation is the suite's observation dict flattened in the suite's key order
+  (``observation_keys``), as float64; its Box is unbounded, as the suite's ``Array`` specs are;
+- the action Box is the suite's action spec (only tasks whose spec is bounded are offered);
+- the suite's time limit ends an episode as a truncation (its discount stays 1, so a learner
+  bootstraps through it); an episode the task ends with discount 0 is a termination;
+- ``reset(seed=s)`` reseeds the task's own random state (``task.random``) from ``s``, so an episode is
+  the one ``suite.load(domain, task, task_kwargs={"random": ...})`` gives for the same draws;
+- the keywords are the suite task's own: ``time_limit`` (seconds) and ``random`` (the seed of the
+  task's random state before the first seeded reset).
+
+Importing this module needs Gymnasium (the ``gym`` extra; dm_control is a core dependency):
+``somarm.tasks`` imports it only when a ``dmc:`` task is named.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+__all__ = ["PREFIX", "SuiteEnv", "names", "split_name", "flatten", "observation_keys"]
+
+#: What a suite task's name starts with.
+PREFIX = "dmc:"
+
+
+@functools.lru_cache(maxsize=1)
+def _suite_tasks() -> tuple[tuple[str, str], ...]:
+    from dm_control import suite
+
+    return tuple(suite.ALL_TASKS)
+
+
+def _bounded(spec) -> bool:
+    return bool(np.isfinite(spec.minimum).all() and np.isfinite(spec.maximum).all())
+
+
+def names() -> tuple[str, ...]:
+    """Every suite task, as ``dmc:DOMAIN-TASK``, in the suite's order.
+
+    Listed without building them (building all takes seconds): every suite task's action spec is
+    bounded (a test opens each), and ``SuiteEnv`` refuses one that is not, should the suite add it.
+    """
+    return tuple(f"{PREFIX}{domain}-{task}" for domain, task in _suite_tasks())
+
+
+def split_name(name: str) -> tuple[str, str]:
+    """``"dmc:point_mass-easy"`` -> ``("point_mass", "easy")``.
+
+    Raises:
+      ValueError: no such domain or task in the suite (one line naming what there is).
+    """
+    body = name[len(PREFIX):] if name.startswith(PREFIX) else name
+    domain, _, task = body.partition("-")
+    tasks = _suite_tasks()
+    domains = sorted({d for d, _ in tasks})
+    if domain not in domains:
+        raise ValueError(f"unknown dm_control domain {domain!r} in {name!r}; give dmc:DOMAIN-TASK with a "
+                         f"domain of {', '.join(domains)}")
+    own = [t for d, t in tasks if d == domain]
+    if task not in own:
+        raise ValueError(f"unknown task {task!r} of dm_control's {domain} in {name!r}; its tasks: {', '.join(own)}")
+    return domain, task
+
+
+def observation_keys(observation_spec) -> tuple[tuple[str, int], ...]:
+    """``(key, size)`` of each observation in the suite's order (a scalar counts 1)."""
+    return tuple((key, int(np.prod(spec.shape, dtype=np.int64))) for key, spec in observation_spec.items())
+
+
+def flatten(observation) -> np.ndarray:
+    """A suite observation dict as one float64 vector, in the dict's (the suite's) key order."""
+    return np.concatenate([np.asarray(value, dtype=np.float64).reshape(-1) for value in observation.values()])
+
+
+def _load(domain: str, task: str, task_kwargs: dict[str, Any]):
+    from dm_control import suite
+
+    try:
+        return suite.load(domain, task, task_kwargs=task_kwargs)
+    except TypeError as exc:
+        raise ValueError(f"dm_control's {domain}-{task} does not take these keywords: {exc}") from None
+
+
+def _check_time_limit(time_limit: Any) -> float | None:
+    if time_limit is None:
+        return None
+    if isinstance(time_limit, bool) or not isinstance(time_limit, (int, float)) or not np.isfinite(time_limit) \
+            or time_limit <= 0:
+        raise ValueError(f"time_limit takes a finite number of seconds > 0, got {time_limit!r}")
+    return float(time_limit)
+
+
+def _check_random(random: Any) -> int | None:
+    if random is None:
+        return None
+    if isinstance(random, bool) or not isinstance(random, (int, np.integer)) or not 0 <= random < 2**32:
+        raise ValueError(f"random takes a whole number in [0, 2**32) (the task's seed), got {random!r}")
+    return int(random)
+
+
+class SuiteEnv(gymnasium.Env):
+    """One dm_control suite task as a Gymnasium environment (see the module's docstring).
+
+    Args:
+      domain, task: a suite task (``dm_control.suite.ALL_TASKS``) with a bounded action spec.
+      time_limit: the episode's length in seconds (None: the suite's own for the task).
+      random: the seed of the task's random state until the first seeded ``reset``.
+
+    Raises:
+      ValueError: an unknown domain or task, an unbounded action spec, or a bad keyword (one line).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, domain: str, task: str, *, time_limit: float | None = None, random: int | None = None):
+        split_name(f"{domain}-{task}")
+        kwargs: dict[str, Any] = {"random": _check_random(random)}
+        if (limit := _check_time_limit(time_limit)) is not None:
+            kwargs["time_limit"] = limit
+        self.domain, self.task = domain, task
+        self.environment = _load(domain, task, kwargs)
+        action_spec = self.environment.action_spec()
+        if not _bounded(action_spec):
+            raise ValueError(f"dm_control's {domain}-{task} has an unbounded action spec; somarm's "
+                             "action map needs finite bounds")
+        self.keys = observation_keys(self.environment.observation_spec())
+        size = sum(n for _, n in self.keys)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float64)
+        self.action_space = spaces.Box(np.asarray(action_spec.minimum, dtype=np.float64).reshape(-1),
+                                       np.asarray(action_spec.maximum, dtype=np.float64).reshape(-1),
+                                       dtype=np.float64)
+        # control.Environment keeps its step limit (time limit / control timestep) private.
+        step_limit = self.environment._step_limit
+        #: Steps of one whole episode (the time limit over the control timestep; None: no limit).
+        self.episode_steps = int(round(step_limit)) if np.isfinite(step_limit) else None
+
+    @property
+    def physics(self):
+        """The suite task's ``dm_control.mujoco.Physics`` (the viewer draws its model)."""
+        return self.environment.physics
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        if seed is not None:
+            self.environment.task.random.seed(int(self.np_random.integers(2**32)))
+        step = self.environment.reset()
+        return flatten(step.observation), {}
+
+    def step(self, action):
+        step = self.environment.step(np.asarray(action, dtype=np.float64))
+        terminated = bool(step.last() and step.discount == 0.0)
+        truncated = bool(step.last() and not terminated)
+        return flatten(step.observation), float(step.reward or 0.0), terminated, truncated, {}
+
+    def close(self) -> None:
+        self.environment.close()

@@ -1,0 +1,106 @@
+"""The suite tasks behind Gymnasium's API: same physics as dm_env, episodes end as the suite says."""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gymnasium")
+
+from dm_control import suite  # noqa: E402
+
+from somarm.tasks import dmc  # noqa: E402
+
+
+def _actions(rng, env, n):
+    low, high = env.action_space.low, env.action_space.high
+    return low + (high - low) * rng.random((n, low.size))
+
+
+@pytest.mark.parametrize("domain, task", [("reacher", "easy"), ("cartpole", "swingup"), ("point_mass", "easy")])
+def test_a_suite_env_steps_the_same_physics_as_the_dm_env_path(domain, task):
+    env = dmc.SuiteEnv(domain, task)
+    observation, _ = env.reset(seed=7)
+    # The dm_env path: the same task, its random state seeded with the draw reset(seed=7) made.
+    seed = int(np.random.Generator(np.random.PCG64(7)).integers(2**32))
+    reference = suite.load(domain, task, task_kwargs={"random": seed})
+    step = reference.reset()
+    np.testing.assert_array_equal(observation, dmc.flatten(step.observation))
+    for action in _actions(np.random.default_rng(0), env, 20):
+        observation, reward, terminated, truncated, _ = env.step(action)
+        step = reference.step(action)
+        np.testing.assert_array_equal(observation, dmc.flatten(step.observation))
+        assert reward == step.reward
+        assert not (terminated or truncated)
+
+
+def test_the_observation_is_flattened_in_the_suites_key_order():
+    env = dmc.SuiteEnv("reacher", "easy")
+    observation, _ = env.reset(seed=0)
+    assert [key for key, _ in env.keys] == list(env.environment.observation_spec())
+    parts = env.environment._task.get_observation(env.physics)
+    np.testing.assert_array_equal(observation, np.concatenate([np.ravel(v) for v in parts.values()]))
+    assert env.observation_space.shape == (sum(n for _, n in env.keys),)
+
+
+def test_the_time_limit_is_a_truncation_not_a_termination():
+    env = dmc.SuiteEnv("pendulum", "swingup", time_limit=0.2)
+    env.reset(seed=1)
+    ends = [env.step(env.action_space.sample())[2:4] for _ in range(env.episode_steps)]
+    assert env.episode_steps == round(0.2 / env.environment.control_timestep())
+    assert ends[-1] == (False, True)
+    assert all(end == (False, False) for end in ends[:-1])
+
+
+def test_the_same_seed_gives_the_same_episode_and_another_seed_another():
+    def episode(seed):
+        env = dmc.SuiteEnv("point_mass", "easy")
+        first, _ = env.reset(seed=seed)
+        rest = [env.step(a)[0] for a in _actions(np.random.default_rng(3), env, 10)]
+        return np.stack([first, *rest])
+
+    np.testing.assert_array_equal(episode(4), episode(4))
+    assert not np.array_equal(episode(4), episode(5))
+
+
+def test_every_listed_task_opens_with_a_bounded_action_box():
+    listed = dmc.names()
+    assert len(listed) == len(suite.ALL_TASKS)
+    for name in listed:
+        env = dmc.SuiteEnv(*dmc.split_name(name))
+        assert np.isfinite(env.action_space.low).all() and np.isfinite(env.action_space.high).all()
+    assert "dmc:point_mass-easy" in listed and "dmc:cartpole-swingup_sparse" in listed
+    assert dmc.split_name("dmc:cartpole-swingup_sparse") == ("cartpole", "swingup_sparse")
+
+
+@pytest.mark.parametrize("name, words", [
+    ("dmc:reachr-easy", ["unknown dm_control domain 'reachr'", "reacher"]),
+    ("dmc:reacher-medium", ["unknown task 'medium'", "easy, hard"]),
+    ("dmc:reacher", ["unknown task ''", "easy, hard"]),
+])
+def test_an_unknown_domain_or_task_is_refused_in_one_line_naming_what_there_is(name, words):
+    with pytest.raises(ValueError) as caught:
+        dmc.split_name(name)
+    assert "\n" not in str(caught.value)
+    assert all(word in str(caught.value) for word in words)
+
+
+@pytest.mark.parametrize("kwargs, key", [({"time_limit": 0}, "time_limit"), ({"time_limit": "long"}, "time_limit"),
+                                         ({"time_limit": float("nan")}, "time_limit"), ({"random": -1}, "random"),
+                                         ({"random": 1.5}, "random")])
+def test_bad_keywords_are_refused_naming_the_key(kwargs, key):
+    with pytest.raises(ValueError, match=f"^{key} takes"):
+        dmc.SuiteEnv("reacher", "easy", **kwargs)
+
+
+def test_an_unbounded_action_spec_is_refused(monkeypatch):
+    from dm_env import specs
+
+    real = dmc._load
+
+    def unbounded(domain, task, kwargs):
+        environment = real(domain, task, kwargs)
+        environment.action_spec = lambda: specs.BoundedArray((1,), np.float64, -np.inf, np.inf)
+        return environment
+
+    monkeypatch.setattr(dmc, "_load", unbounded)
+    with pytest.raises(ValueError, match="unbounded action spec"):
+        dmc.SuiteEnv("pendulum", "swingup")
