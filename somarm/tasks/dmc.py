@@ -26,10 +26,13 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-__all__ = ["PREFIX", "SuiteEnv", "names", "split_name", "flatten", "observation_keys"]
+__all__ = ["PREFIX", "NAMESPACE", "SuiteEnv", "names", "split_name", "gym_id", "flatten", "observation_keys"]
 
 #: What a suite task's name starts with.
 PREFIX = "dmc:"
+#: The Gymnasium namespace this module registers the suite's tasks under on import:
+#: ``gymnasium.make("somarm-dmc/reacher-easy-v0")``.
+NAMESPACE = "somarm-dmc"
 
 
 @functools.lru_cache(maxsize=1)
@@ -69,6 +72,16 @@ def split_name(name: str) -> tuple[str, str]:
     if task not in own:
         raise ValueError(f"unknown task {task!r} of dm_control's {domain} in {name!r}; its tasks: {', '.join(own)}")
     return domain, task
+
+
+def gym_id(name: str) -> str:
+    """The Gymnasium id of suite task ``name``: ``"dmc:reacher-easy"`` -> ``"somarm-dmc/reacher-easy-v0"``.
+
+    Raises:
+      ValueError: as ``split_name``.
+    """
+    domain, task = split_name(name)
+    return f"{NAMESPACE}/{domain}-{task}-v0"
 
 
 def observation_keys(observation_spec) -> tuple[tuple[str, int], ...]:
@@ -145,8 +158,18 @@ class SuiteEnv(gymnasium.Env):
 
     @property
     def physics(self):
-        """The suite task's ``dm_control.mujoco.Physics`` (the viewer draws its model)."""
+        """The suite task's ``dm_control.mujoco.Physics``."""
         return self.environment.physics
+
+    @property
+    def model(self):
+        """MuJoCo's ``MjModel`` of the task, as Gymnasium's MuJoCo environments have it (the viewer draws it)."""
+        return self.environment.physics.model.ptr
+
+    @property
+    def data(self):
+        """MuJoCo's ``MjData`` of the task, stepped by the suite."""
+        return self.environment.physics.data.ptr
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -163,3 +186,15 @@ class SuiteEnv(gymnasium.Env):
 
     def close(self) -> None:
         self.environment.close()
+
+
+def _register() -> None:
+    """Every suite task as a Gymnasium id (``gym_id``); the suite ends its own episodes, so no TimeLimit."""
+    for domain, task in _suite_tasks():
+        env_id = f"{NAMESPACE}/{domain}-{task}-v0"
+        if env_id not in gymnasium.registry:
+            gymnasium.register(env_id, entry_point=SuiteEnv, kwargs={"domain": domain, "task": task},
+                               disable_env_checker=True)
+
+
+_register()

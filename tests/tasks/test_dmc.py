@@ -104,3 +104,14 @@ def test_an_unbounded_action_spec_is_refused(monkeypatch):
     monkeypatch.setattr(dmc, "_load", unbounded)
     with pytest.raises(ValueError, match="unbounded action spec"):
         dmc.SuiteEnv("pendulum", "swingup")
+
+
+def test_the_suite_is_registered_with_gymnasium_under_its_own_namespace():
+    import gymnasium
+
+    env = gymnasium.make(dmc.gym_id("dmc:cartpole-balance"), time_limit=1.0)
+    assert env.spec.max_episode_steps is None and env.unwrapped.episode_steps == 100
+    observation, _ = env.reset(seed=2)
+    direct = dmc.SuiteEnv("cartpole", "balance", time_limit=1.0)
+    np.testing.assert_array_equal(observation, direct.reset(seed=2)[0])
+    assert env.unwrapped.model.nq == direct.physics.model.nq and env.unwrapped.data.qpos.shape == (direct.physics.model.nq,)
