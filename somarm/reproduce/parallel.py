@@ -8,7 +8,9 @@ on as many threads as there are cores (while two run the system shares the cores
 left gets them all: measured on 2 cores, the paper's experiments took 288 s so against 312 s with
 one thread per worker). It sends back each finished section, and this process alone writes the
 report, in the paper's order, after each one. A worker's results equal a run in this process:
-every experiment draws from its own seeds.
+every experiment draws from its own seeds. While it trains, a worker sends its training parts'
+progress too (``somarm.run.progress.report_to``), which this process shows in one status line
+(``somarm.reproduce.status``).
 
 Workers start with Ctrl-C ignored, so a Ctrl-C at the terminal (or SIGTERM, which the command
 turns into Ctrl-C) reaches this process alone, which then sends every worker SIGTERM: that stops a
@@ -30,6 +32,7 @@ from pathlib import Path
 
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section
+from somarm.reproduce.status import Status, expected_durations
 from somarm.run.workers import outcome, start
 
 __all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "run"]
@@ -50,10 +53,13 @@ def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend:
     each with ``workers.outcome``'s ``(kind, section or message)`` (after anything but "ok" this
     worker ends). SIGTERM, from the parent or at its death, stops the experiment under way."""
     from somarm import tasks
+    from somarm.run.progress import report_to
     from somarm.run.stopping import sigterm_as_interrupt
 
     sigterm_as_interrupt()
     tasks.set_threads(threads)
+    # Every training part's progress goes to the parent (the bars themselves stay off in a worker).
+    report_to(lambda label, step, total: connection.send(("progress", (label, step, total))))
     try:
         while (experiment := connection.recv()) is not None:
             began = time.perf_counter()
@@ -79,9 +85,12 @@ def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend:
 
 
 def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs: int, quick: bool,
-        seeds: tuple[int, ...], backend: str, finished: Callable[[str, Section], None]) -> int:
+        seeds: tuple[int, ...], backend: str, finished: Callable[[str, Section], None],
+        progress: bool = True) -> int:
     """Run ``experiments`` (name -> experiment, module-level functions that a worker imports) in up to
-    ``jobs`` worker processes; ``finished(name, section)`` as each ends.
+    ``jobs`` worker processes; ``finished(name, section)`` as each ends (what it prints goes above the
+    status line). ``progress``: show the status line (a bar on a terminal, a line a minute elsewhere);
+    the experiments' start lines are written either way.
 
     Returns:
       0 when every experiment ran, 130 when interrupted (the finished ones were reported).
@@ -102,6 +111,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                              duplex=True))
     idle = list(workers)
     running: dict = {}  # connection -> (name, process)
+    status = Status(waiting, workers=len(workers), expected=expected_durations(quick, len(seeds)), enabled=progress)
     try:
         while waiting or running:
             while waiting and idle:
@@ -109,32 +119,46 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                 connection, process = idle.pop(0)
                 connection.send(experiments[name])
                 running[connection] = (name, process)
-                print(f"{name}: started in process {process.pid}", file=sys.stderr, flush=True)
-            for connection in wait(list(running)):
-                name, process = running.pop(connection)
+                status.started(name, process.pid)
+            for connection in wait(list(running), timeout=_status_period(status)):
+                name, process = running[connection]
                 try:
                     kind, payload = connection.recv()
                 except EOFError:
                     process.join()
                     kind, payload = "crash", f"its process ended without an answer (exit code {process.exitcode})"
+                if kind == "progress":
+                    status.progress(name, *payload)
+                    continue
+                del running[connection]
+                status.finished(name)
                 if kind == "ok":
                     if waiting:
                         idle.append((connection, process))
                     else:  # nothing left for it: it ends now, beside the others' last experiments
                         connection.send(None)
-                    finished(name, payload)
+                    with status.above():
+                        finished(name, payload)
                 elif kind == "interrupted":
                     raise KeyboardInterrupt
                 elif kind == "error":
                     raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
                 else:
                     raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
+            status.draw()
     except KeyboardInterrupt:
+        status.close()
         print("\ninterrupted; the report holds the experiments that finished", file=sys.stderr)
         return 130
     finally:
+        status.close()
         _stop(workers)
     return 0
+
+
+def _status_period(status: Status) -> float:
+    """How long to wait for a worker's message before the status is redrawn (its clock moves on)."""
+    return 0.5 if status.terminal else 5.0
 
 
 def _stop(workers: list) -> None:

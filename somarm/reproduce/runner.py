@@ -139,7 +139,7 @@ def reproduce(
             from somarm.reproduce import parallel
 
             status = parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
-                                  finished=finished)
+                                  finished=finished, progress=progress)
         else:
             status = _run_in_turn(experiments, out, quick=quick, seeds=all_seeds, progress=progress,
                                   backend=backend, finished=finished)

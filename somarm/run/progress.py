@@ -4,6 +4,10 @@ On a terminal it is one line redrawn in place (carriage returns). Into a file or
 log, ``2> log``) carriage returns would pile up, so there it writes plain lines instead: the first
 update (the run has started), then one at each tenth of the run or each minute, whichever comes
 first, and the final line once.
+
+In a worker process of ``somarm reproduce --jobs`` nothing is drawn: ``report_to`` hands every
+bar's step to the parent instead (``somarm.reproduce.status`` shows it), whether or not the bar
+itself is enabled.
 """
 
 from __future__ import annotations
@@ -11,13 +15,26 @@ from __future__ import annotations
 import math
 import sys
 import time
+from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["Progress", "end_line"]
+__all__ = ["Progress", "end_line", "report_to"]
 
 #: Away from a terminal: one line per this share of the run, or per this many seconds.
 _LOG_SHARE = 0.1
 _LOG_PERIOD_S = 60.0
+#: Seconds between two reports to ``report_to``'s reporter (the first and last always go).
+REPORT_PERIOD_S = 1.0
+
+#: Where every bar of this process reports ``(label, step, total)``, if anywhere (``report_to``).
+_reporter: Callable[[str, int, int], None] | None = None
+
+
+def report_to(reporter: Callable[[str, int, int], None] | None) -> None:
+    """Hand every bar's progress in this process to ``reporter(label, step, total)``, at most once per
+    ``REPORT_PERIOD_S`` per bar (its first and last step always); None stops it."""
+    global _reporter
+    _reporter = reporter
 
 
 #: The bar whose line is open on a terminal (drawn without its newline yet), if any.
@@ -70,12 +87,16 @@ class Progress:
         self._every = max(1, round(self.total * _LOG_SHARE))  # steps between lines in a log
         self._next_mark = self._every
         self._drawn_step: int | None = None
+        self._reported = -float("inf")
 
     def update(self, step: int, mean_reward: float, *, force: bool = False) -> None:
         """Redraw if enough time (terminal) or enough of the run (log) has passed, or if ``force``."""
+        now = time.perf_counter()
+        if _reporter is not None and (force or now - self._reported >= REPORT_PERIOD_S):
+            self._reported = now
+            _reporter(self.label, step, self.total)
         if not self.enabled:
             return
-        now = time.perf_counter()
         if self.terminal:
             if not force and now - self._last < self._period:
                 return
@@ -99,6 +120,8 @@ class Progress:
 
     def close(self, step: int, mean_reward: float) -> None:
         """Draw the final state (unless it is already the last line drawn) and end the line."""
+        if _reporter is not None:
+            _reporter(self.label, step, self.total)
         if not self.enabled:
             return
         if self._drawn_step != step:

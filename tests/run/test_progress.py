@@ -63,3 +63,19 @@ def test_no_mean_is_drawn_before_a_whole_block(capsys):
     bar = Progress(10, label="x", stream=stream)
     bar.update(1, float("nan"), force=True)
     assert "nan" not in stream.getvalue() and "mean reward    -" in stream.getvalue()
+
+
+def test_a_reporter_gets_the_first_and_last_step_and_few_between(monkeypatch):
+    from somarm.run import progress
+
+    got = []
+    progress.report_to(lambda label, step, total: got.append((label, step, total)))
+    try:
+        bar = Progress(100_000, label="Fig. 7", stream=io.StringIO(), enabled=False)
+        for step in range(1, 100_001, 10):
+            bar.update(step, 0.0)
+        bar.close(100_000, 0.0)
+    finally:
+        progress.report_to(None)
+    assert got[0] == ("Fig. 7", 1, 100_000) and got[-1] == ("Fig. 7", 100_000, 100_000)
+    assert len(got) <= 2 + 10  # one a second at most (the loop above takes well under 10 s)
