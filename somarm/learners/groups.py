@@ -41,6 +41,7 @@ import numba
 import numpy as np
 
 from somarm.learners._kernels import _pull, _pull_action, neighbourhood_row, perturbation, wrapped
+from somarm.learners.growing import grid_row, grow
 
 __all__ = ["GROUPINGS", "check_groups", "parse_groups", "group_table", "features", "act_kernel", "learn_kernel",
            "predict_kernel", "greedy_kernel"]
@@ -118,37 +119,38 @@ def group_table(groups: list[list[int]]) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def features(x, weights, groups, k, units, phi, part, order, squared):
+def features(x, weights, groups, shapes, k, units, phi, part, order, squared):
     """Each map's ``k`` nearest units to its part of ``x`` and their tapered weights, in place.
 
     Shapes: x ``(obs_dim,)``, weights ``(G * n_units, width)`` (one trial), groups ``(G, width)``,
-    units (rows of ``weights``) and phi ``(G, k)``; part ``(width,)``, order and squared ``(k + 1,)``
-    are scratch.
+    shapes ``(G, 2)`` each map's current grid (its first rows x cols places hold its units), units
+    (rows of ``weights``) and phi ``(G, k)``; part ``(width,)``, order and squared ``(k + 1,)`` are scratch.
     """
     n_groups, width = groups.shape
     n_units = weights.shape[0] // n_groups
-    size = min(k + 1, n_units)
     for g in range(n_groups):
+        count = shapes[g, 0] * shapes[g, 1]
+        size = min(k + 1, count)
         for i in range(width):
             part[i] = x[groups[g, i]] if groups[g, i] >= 0 else 0.0
-        count = 0
+        found = 0
         worst = np.inf
-        for m in range(g * n_units, (g + 1) * n_units):
+        for m in range(g * n_units, g * n_units + count):
             total = 0.0
             for i in range(width):
                 diff = part[i] - weights[m, i]
                 total += diff * diff
-            if count < size or total < worst:
-                slot = count if count < size else size - 1
+            if found < size or total < worst:
+                slot = found if found < size else size - 1
                 while slot > 0 and squared[slot - 1] > total:  # ties keep the lower index first
                     squared[slot] = squared[slot - 1]
                     order[slot] = order[slot - 1]
                     slot -= 1
                 squared[slot] = total
                 order[slot] = m
-                if count < size:
-                    count += 1
-                worst = squared[count - 1] if count == size else np.inf
+                if found < size:
+                    found += 1
+                worst = squared[found - 1] if found == size else np.inf
         _tapered(order, squared, k, size, units[g], phi[g])
 
 
@@ -233,7 +235,7 @@ def _greedy(values, tie):
 
 
 @numba.njit(cache=True, nogil=True)
-def act_kernel(observations, input_weights, action_weights, q, groups, k, rows, p, epsilon, low, high, wrap,
+def act_kernel(observations, input_weights, action_weights, q, groups, shapes, k, rows, p, epsilon, low, high, wrap,
                gaussian, interpolated, action_shape, units, phi, chosen, actions):
     """Steps 1 to 5 for every trial: fills ``units``/``phi`` ``(n_trials, G, k)``, ``chosen`` ``(n_trials,)``
     and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring)."""
@@ -244,7 +246,7 @@ def act_kernel(observations, input_weights, action_weights, q, groups, k, rows, 
     squared = np.empty(k + 1)
     for trial in range(observations.shape[0]):
         row = rows[trial]
-        features(observations[trial], input_weights[trial], groups, k, units[trial], phi[trial], part, order, squared)
+        features(observations[trial], input_weights[trial], groups, shapes[trial], k, units[trial], phi[trial], part, order, squared)
         exploring = row[0] < p
         if exploring:
             unit = min(int(row[1] * n_a), n_a - 1)
@@ -264,8 +266,8 @@ def act_kernel(observations, input_weights, action_weights, q, groups, k, rows, 
 
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
-                 input_weights, action_weights, q, groups, k, alpha, lambda_s, lambda_a, n_s, n_a, offsets_s,
-                 offsets_a, neighbourhood_q, low, high, wrap):
+                 input_weights, action_weights, q, groups, shapes, k, alpha, lambda_s, lambda_a, n_s, n_a, offsets_s,
+                 offsets_a, neighbourhood_q, low, high, wrap, errors, grow_now):
     """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring)."""
     n_groups, width = groups.shape
     n_units = q.shape[1] // n_groups
@@ -288,7 +290,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
         a_k = chosen[trial]
         target = rewards[trial]
         if bootstrap[trial]:
-            features(next_observations[trial], input_weights[trial], groups, k, next_units, next_phi, part, order,
+            features(next_observations[trial], input_weights[trial], groups, shapes[trial], k, next_units, next_phi, part, order,
                      squared)
             _summed(table, next_units, next_phi, values)
             top = values[0]
@@ -328,7 +330,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     rest = values[a_k] - parts[g, a_k]
                     table[centre, a_k] = value + step * weight * (target - rest - value)
                     continue
-                neighbourhood_row(offsets_s, centre - first, n_s, psi_s)
+                grid_row(offsets_s, shapes[trial, g, 0], shapes[trial, g, 1], centre - first, n_s, psi_s)
                 for m in range(n_units):
                     if psi_s[m] > 0.0:
                         a_m = step * weight * psi_s[m]
@@ -337,17 +339,26 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                                 value = table[first + m, a]
                                 rest = values[a] - parts[g, a]
                                 table[first + m, a] = value + a_m * psi_a[a] * (target - rest - value)
-        # Step 9: each map moves towards its part of the observation round its nearest unit.
+        # Step 9: each map moves towards its part of the observation round its nearest unit; a growing
+        # map adds the winner's squared distance to its sum first, and grows when it is time.
         for g in range(n_groups):
             first = g * n_units
+            winner = units[trial, g, 0]
+            total = 0.0
             for i in range(width):
                 part[i] = observations[trial, groups[g, i]] if groups[g, i] >= 0 else 0.0
-            neighbourhood_row(offsets_s, units[trial, g, 0] - first, n_s, psi_s)
+                diff = part[i] - input_weights[trial, winner, i]
+                total += diff * diff
+            errors[trial, winner] += total
+            grid_row(offsets_s, shapes[trial, g, 0], shapes[trial, g, 1], winner - first, n_s, psi_s)
             _pull(input_weights[trial, first:first + n_units], part, lambda_s, psi_s)
+            if grow_now:
+                grow(input_weights[trial, first:first + n_units], table[first:first + n_units],
+                     errors[trial, first:first + n_units], shapes[trial, g], offsets_s.shape[0], offsets_s.shape[1])
 
 
 @numba.njit(cache=True, nogil=True)
-def predict_kernel(observations, input_weights, action_weights, q, groups, k, interpolated, action_shape, low,
+def predict_kernel(observations, input_weights, action_weights, q, groups, shapes, k, interpolated, action_shape, low,
                    high, wrap, out):
     """Greedy actions of ``observations (n_trials, n_obs, obs_dim)`` into ``out (n_trials, n_obs, action_dim)``:
     the best summed Q, ties to the lowest index, the parabola's shift with the interpolated response."""
@@ -360,7 +371,7 @@ def predict_kernel(observations, input_weights, action_weights, q, groups, k, in
     phi = np.empty((n_groups, k))
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            features(observations[trial, n], input_weights[trial], groups, k, units, phi, part, order, squared)
+            features(observations[trial, n], input_weights[trial], groups, shapes[trial], k, units, phi, part, order, squared)
             _summed(q[trial], units, phi, values)
             unit = _greedy(values, -1.0)
             action = out[trial, n]
@@ -374,7 +385,7 @@ def predict_kernel(observations, input_weights, action_weights, q, groups, k, in
 
 
 @numba.njit(cache=True, nogil=True)
-def greedy_kernel(observations, input_weights, q, groups, k, units_out, first_out):
+def greedy_kernel(observations, input_weights, q, groups, shapes, k, units_out, first_out):
     """The greedy action unit (ties to the lowest index) and the first map's nearest unit of
     ``observations (n_trials, n_obs, obs_dim)``, into ``units_out``/``first_out`` ``(n_trials, n_obs)``."""
     n_groups = groups.shape[0]
@@ -386,7 +397,7 @@ def greedy_kernel(observations, input_weights, q, groups, k, units_out, first_ou
     phi = np.empty((n_groups, k))
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            features(observations[trial, n], input_weights[trial], groups, k, units, phi, part, order, squared)
+            features(observations[trial, n], input_weights[trial], groups, shapes[trial], k, units, phi, part, order, squared)
             _summed(q[trial], units, phi, values)
             units_out[trial, n] = _greedy(values, -1.0)
             first_out[trial, n] = units[0, 0]

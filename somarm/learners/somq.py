@@ -32,7 +32,7 @@ from typing import Literal
 
 import numpy as np
 
-from somarm.learners import _kernels, groups, interpolation
+from somarm.learners import _kernels, groups, growing, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
@@ -120,6 +120,11 @@ class SOMQConfig(ConfigBase):
     when learning (1: the winning unit alone, the paper's). Any value but 1, or grouped maps, runs
     ``somarm.learners.groups``' kernels; the paper's model is ``input_groups=all`` with ``k_nearest=1``."""
 
+    grow_every: int = 0
+    """Learning steps between growths of each input map (``somarm.learners.growing``): a growing map starts
+    with 2x2 units (2 on a line) and gains a row or a column where its units' quantisation error is largest,
+    up to ``input_shape`` units (0: every map has ``input_shape`` units from the start, the paper's)."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -139,11 +144,14 @@ class SOMQConfig(ConfigBase):
         if isinstance(self.k_nearest, bool) or not isinstance(self.k_nearest, (int, np.integer)) or self.k_nearest < 1:
             raise ValueError(f"k_nearest must be a whole number >= 1, got {self.k_nearest!r}")
         object.__setattr__(self, "k_nearest", int(self.k_nearest))
+        if isinstance(self.grow_every, bool) or not isinstance(self.grow_every, (int, np.integer)) or self.grow_every < 0:
+            raise ValueError(f"grow_every must be a whole number >= 0 (0: no growth), got {self.grow_every!r}")
+        object.__setattr__(self, "grow_every", int(self.grow_every))
 
     @property
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
-        return self.input_groups != "all" or self.k_nearest != 1
+        return self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0
 
 
 def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray, span: float = 1.0) -> np.ndarray:
@@ -204,7 +212,7 @@ class SOMQ(MapLearner):
         if config.grouped:  # G maps of n_s units over the widest group's dimensions, G tables
             table = groups.group_table(groups.parse_groups(config.input_groups, obs_dim))
             n_maps, width = table.shape
-            n_floats += n_trials * (n_maps * n_s * (width + n_a) + n_a * action_dim + 2 * n_maps * config.k_nearest)
+            n_floats += n_trials * (n_maps * n_s * (width + n_a + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -226,9 +234,15 @@ class SOMQ(MapLearner):
             self._group_units = np.zeros((self.n_trials, n_maps, cfg.k_nearest), dtype=np.int64)
             self._phi = np.zeros((self.n_trials, n_maps, cfg.k_nearest))
             self._action_grid_shape = np.array(cfg.action_shape, dtype=np.int64)
+            full = self._offsets_s.shape  # (rows, cols); (n, 1) for a line
+            start = [min(growing.START, size) for size in full] if cfg.grow_every else list(full)
+            self._shapes = np.tile(np.array(start, dtype=np.int64), (self.n_trials, n_maps, 1))
+            self._errors = np.zeros((self.n_trials, n_maps * n_s))
         else:
             self._group_units = np.zeros((self.n_trials, 1, 1), dtype=np.int64)
             self._phi = np.zeros((self.n_trials, 1, 1))
+            self._shapes = np.zeros((self.n_trials, 1, 2), dtype=np.int64)
+            self._errors = np.zeros((self.n_trials, 1))
         for trial, rng in enumerate(self._initial_generators()):
             # Table 1 order: input weights first, then action weights, from one child stream.
             if cfg.grouped:
@@ -268,13 +282,14 @@ class SOMQ(MapLearner):
         """The action dimensions this learner wraps round (``periodic_actions`` and the task's declaration)."""
         return self._wrap.copy()
 
-    _STATE_ARRAYS = ("input_weights", "action_weights", "q")
+    # ``_shapes`` and ``_errors``: each map's current grid and its units' summed errors (grouped maps only).
+    _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors")
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     # ``_group_units`` and ``_phi``: each map's k nearest units and their weights (grouped maps only).
     _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted", "_group_units", "_phi")
     # Files saved before these existed load with ``_shifted`` all False (nothing shifts: the winner
     # response) and the paper's one map (no groups).
-    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi")
+    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors")
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -299,7 +314,7 @@ class SOMQ(MapLearner):
         if self.config.grouped:
             groups.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, self._groups,
-                self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
+                self._shapes, self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
                 self.action_high, self._wrap, self.config.noise == "gaussian", self._interpolated,
                 self._action_grid_shape, self._group_units, self._phi, self._units, self._actions,
             )
@@ -343,9 +358,10 @@ class SOMQ(MapLearner):
             groups.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
                 self._units, self._actions, self.input_weights, self.action_weights, self.q, self._groups,
-                self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
+                self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
                 values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
-                self.action_high, self._wrap,
+                self.action_high, self._wrap, self._errors,
+                self.config.grow_every > 0 and (self.t + 1) % self.config.grow_every == 0,
             )
             self._pending = False
             self.t += 1
@@ -391,7 +407,7 @@ class SOMQ(MapLearner):
             many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self._groups,
-                                  self.config.k_nearest, self._interpolated, self._action_grid_shape,
+                                  self._shapes, self.config.k_nearest, self._interpolated, self._action_grid_shape,
                                   self.action_low, self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
         if self._interpolated:
@@ -411,5 +427,6 @@ class SOMQ(MapLearner):
         many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
         units = np.empty(many.shape[:2], dtype=np.int64)
         first = np.empty(many.shape[:2], dtype=np.int64)
-        groups.greedy_kernel(many, self.input_weights, self.q, self._groups, self.config.k_nearest, units, first)
+        groups.greedy_kernel(many, self.input_weights, self.q, self._groups, self._shapes, self.config.k_nearest,
+                             units, first)
         return units.reshape(x.shape[:-1]), first.reshape(x.shape[:-1])

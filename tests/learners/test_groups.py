@@ -149,3 +149,42 @@ def test_maps_whose_values_add_solve_two_independent_problems_one_map_of_two_uni
     single = _planted_sum("all", 3000, 1)
     assert grouped >= 0.99, grouped
     assert single <= 0.8, single
+
+
+def test_a_growing_map_starts_at_two_by_two_and_grows_to_its_bound_a_row_or_column_at_a_time():
+    config = small_config((3, 4), True, 0.0).with_changes({"grow_every": 10, "input_groups": "0,1;2,3"})
+    learner = SOMQ(config, n_trials=2, seed=1, **BOX4)
+    np.testing.assert_array_equal(learner._shapes, np.full((2, 2, 2), 2))
+    _drive(learner, 10)
+    assert np.all(learner._shapes.prod(axis=2) == 6)  # one row or one column more
+    _drive(learner, 60)
+    np.testing.assert_array_equal(learner._shapes, np.tile([3, 4], (2, 2, 1)))  # full: 12 units, no more
+
+
+def test_growth_inserts_the_mean_of_the_two_units_beside_the_largest_error():
+    from somarm.learners.growing import grow
+
+    weights = np.zeros((6, 1))
+    weights[:4, 0] = [0.0, 1.0, 0.0, 5.0]  # 2x2: unit 3 is far from unit 2 (beside it) and from unit 1 (above)
+    q = np.zeros((6, 2))
+    q[:4, 0] = [1.0, 2.0, 3.0, 4.0]
+    errors = np.array([0.0, 0.0, 0.0, 9.0, 0.0, 0.0])
+    shape = np.array([2, 2])
+    grow(weights, q, errors, shape, 2, 3)  # f = unit 2 (distance 25 against 16): a new column between them
+    np.testing.assert_array_equal(shape, [2, 3])
+    np.testing.assert_array_equal(weights[:, 0], [0.0, 0.5, 1.0, 0.0, 2.5, 5.0])
+    np.testing.assert_array_equal(q[:, 0], [1.0, 1.5, 2.0, 3.0, 3.5, 4.0])
+    assert not errors.any()
+    grow(weights, q, errors, shape, 2, 3)  # full
+    np.testing.assert_array_equal(shape, [2, 3])
+
+
+@pytest.mark.parametrize("grow_every", [0, 7])
+def test_a_growing_trial_alone_equals_the_same_trial_in_a_batch(grow_every):
+    config = small_config((3, 3), True, 0.5).with_changes({"grow_every": grow_every, "k_nearest": 2})
+    batch = SOMQ(config, n_trials=3, seed=2, **BOX4)
+    alone = SOMQ(config, n_trials=1, seed=2, trial_ids=[1], **BOX4)
+    _drive(batch, 60)
+    _drive(alone, 60)
+    for name in ("input_weights", "action_weights", "q", "_shapes"):
+        np.testing.assert_array_equal(getattr(batch, name)[1], getattr(alone, name)[0])
