@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+from collections import deque
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -19,12 +20,17 @@ from typing import cast
 import numpy as np
 
 from somarm.protocols import BatchedTask, EpisodicTask, Learner
-from somarm.run.progress import Progress
+from somarm.run.progress import Measures, Progress
 from somarm.run.stopping import stop_between_steps
 from somarm.tasks.base import step_together
 from somarm.tasks.pool import single_threaded
 
-__all__ = ["Curves", "EpisodeLog", "Episodes", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards"]
+__all__ = ["Curves", "EpisodeLog", "Episodes", "StepHook", "loop", "snapshot", "final_blocks", "final_rewards",
+           "RECENT_EPISODES"]
+
+#: The progress bar of an episodic task shows the mean return of this many last finished episodes
+#: (as Stable-Baselines3's ``ep_rew_mean`` does), fewer until that many have ended.
+RECENT_EPISODES = 100
 
 StepHook = Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]
 
@@ -147,7 +153,9 @@ def loop(
       parts: learner i's trials, ``slice``s covering ``range(n_trials)`` of each task.
       n_steps: steps to take. block: steps per recorded point of the learning curves.
       owners: the index of each learner's task (default: all the first).
-      progress: draw a progress bar with the running mean reward on stderr.
+      progress: draw a progress bar on stderr: the mean reward of the last block for one-step tasks,
+        the mean return of the last ``RECENT_EPISODES`` finished episodes for episodic ones (each
+        scale of reward apart, named).
       on_step: called as ``on_step(step, observations, actions, rewards)`` after every step; cheap
         (one task only).
       label: progress-bar label.
@@ -180,9 +188,13 @@ def loop(
     actions = [np.empty((t.n_trials, t.action_low.size)) for t in tasks]
     snapshots: list[dict[int, dict[str, np.ndarray]]] = [{} for _ in learners]
     bar = Progress(n_steps, label=label, enabled=progress)
-    last_mean = float("nan")
     episodic = [t.episodic for t in tasks]  # multi-step episodes (reach2_obstacle, gym:ID): EpisodicTasks
     log = episode_log if episode_log is not None else (EpisodeLog(tasks) if any(episodic) else None)
+    # The bar shows each scale of reward apart: one-step tasks' mean reward, episodic tasks' mean return.
+    one_step = np.concatenate([np.full(t.n_trials, not e) for t, e in zip(tasks, episodic, strict=True)])
+    recent: deque[float] = deque(maxlen=RECENT_EPISODES)
+    seen = 0 if log is None else len(log.ended)  # episodes the log already held when this call began
+    shown: Measures = _measures(None, one_step, recent, any(episodic))
     # The lanes other than the first run in their own threads; each owns its tasks and learners,
     # so every trial sees the same arithmetic in the same order as with one lane. Whether a step
     # is faster in lanes or in this thread alone (all tasks, one physics call on the batch's own
@@ -235,16 +247,19 @@ def loop(
                 step += 1
                 if log is not None:
                     log.record(step, rewards)
+                    for _, _, returns, _ in log.ended[seen:]:
+                        recent.extend(returns.tolist())
+                    seen = len(log.ended)
                 if on_step is not None:
                     on_step(step, observations[0], actions[0], rewards)
                 if step % block == 0:
                     index = step // block - 1
                     block_means[index] = accumulated / block
                     block_sq_means[index] = accumulated_sq / block
-                    last_mean = float(block_means[index].mean())
+                    shown = _measures(block_means[index], one_step, recent, any(episodic))
                     accumulated[:] = 0.0
                     accumulated_sq[:] = 0.0
-                    bar.update(step, last_mean)
+                    bar.update(step, shown)
                 if step in snapshots_at:
                     for learner, taken in zip(learners, snapshots, strict=True):
                         taken[step] = snapshot(learner)
@@ -254,10 +269,25 @@ def loop(
         except KeyboardInterrupt:  # raised by an on_step hook, or outside the main thread
             interrupted = True
     wall_time = time.perf_counter() - start
-    bar.close(step, last_mean)
+    bar.close(step, shown)
     done = step // block
     return Curves(block_means[:done], block_sq_means[:done], step, wall_time, interrupted, snapshots,
                   None if log is None else log.take())
+
+
+def _measures(block_mean: np.ndarray | None, one_step: np.ndarray, recent: deque[float],
+              any_episodic: bool) -> Measures:
+    """What the progress bar shows: the last block's mean reward over the one-step tasks' trials (a
+    single value when there are only those), the mean return of the ``recent`` finished episodes when
+    there are episodic tasks, named; NaN where nothing is measured yet."""
+    if not any_episodic:
+        return float("nan") if block_mean is None else float(block_mean.mean())
+    shown: dict[str, float] = {}
+    if one_step.any():
+        shown["mean reward"] = float("nan") if block_mean is None else float(block_mean[one_step].mean())
+    name = f"mean return, last {len(recent)} episodes" if recent else "mean return"
+    shown[name] = float(np.mean(recent)) if recent else float("nan")
+    return shown
 
 
 class _LanePolicy:

@@ -18,7 +18,7 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["Progress", "end_line", "report_to"]
+__all__ = ["Measures", "Progress", "end_line", "report_to"]
 
 #: Away from a terminal: one line per this share of the run, or per this many seconds.
 _LOG_SHARE = 0.1
@@ -57,8 +57,22 @@ def _is_terminal(stream: TextIO) -> bool:
         return False
 
 
+#: What a bar shows beside its steps: a single value is the mean reward of the last block; a dict names
+#: its values (``{"mean return, last 100 episodes": -150.2}``), one per scale of reward.
+Measures = float | dict[str, float]
+
+
+def _measures_text(measures: Measures) -> str:
+    named = {"mean reward": measures} if not isinstance(measures, dict) else measures
+    return ", ".join(f"{name} {value:+.4f}" if math.isfinite(value) else f"{name}    -   "  # none measured yet
+                     for name, value in named.items())
+
+
 class Progress:
     """Draws ``label [###...] step/total  mean reward -0.123  12.3 s``.
+
+    What follows the steps is ``update``'s measures: the mean reward of the last block (one-step
+    tasks), or each named value (an episodic task's mean return over its last finished episodes).
 
     Args:
       total: number of steps.
@@ -89,7 +103,7 @@ class Progress:
         self._drawn_step: int | None = None
         self._reported = -float("inf")
 
-    def update(self, step: int, mean_reward: float, *, force: bool = False) -> None:
+    def update(self, step: int, mean_reward: Measures, *, force: bool = False) -> None:
         """Redraw if enough time (terminal) or enough of the run (log) has passed, or if ``force``."""
         now = time.perf_counter()
         if _reporter is not None and (force or now - self._reported >= REPORT_PERIOD_S):
@@ -110,15 +124,14 @@ class Progress:
         self._drawn_step = step
         filled = int(30 * step / self.total)
         bar = "#" * filled + "." * (30 - filled)
-        mean = f"{mean_reward:+.4f}" if math.isfinite(mean_reward) else "   -   "  # no whole block yet
-        text = f"{self.label} [{bar}] {step}/{self.total}  mean reward {mean}  {now - self._start:6.1f} s"
+        text = f"{self.label} [{bar}] {step}/{self.total}  {_measures_text(mean_reward)}  {now - self._start:6.1f} s"
         self.stream.write(f"\r{text}" if self.terminal else f"{text}\n")
         self.stream.flush()
         if self.terminal:
             global _open_bar
             _open_bar = self
 
-    def close(self, step: int, mean_reward: float) -> None:
+    def close(self, step: int, mean_reward: Measures) -> None:
         """Draw the final state (unless it is already the last line drawn) and end the line."""
         if _reporter is not None:
             _reporter(self.label, step, self.total)

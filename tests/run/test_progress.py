@@ -79,3 +79,37 @@ def test_a_reporter_gets_the_first_and_last_step_and_few_between(monkeypatch):
         progress.report_to(None)
     assert got[0] == ("Fig. 7", 1, 100_000) and got[-1] == ("Fig. 7", 100_000, 100_000)
     assert len(got) <= 2 + 10  # one a second at most (the loop above takes well under 10 s)
+
+
+def _last_bar_line(text: str) -> str:
+    return [line for line in text.splitlines() if "] " in line][-1]
+
+
+def test_an_episodic_task_shows_the_mean_return_of_its_last_finished_episodes(capsys):
+    import re
+
+    import numpy as np
+
+    from somarm import run
+    from somarm.run.loop import RECENT_EPISODES
+
+    result = run.train(run.RunConfig(task="reach2_obstacle", n_trials=4, n_steps=3000, seed=1), progress=True)
+    shown = _last_bar_line(capsys.readouterr().err)
+    returns = result.episodes.returns  # in the order they ended
+    assert len(returns) > RECENT_EPISODES  # enough episodes for the window to matter
+    found = re.search(r"mean return, last (\d+) episodes ([-+]\d+\.\d+)", shown)
+    assert found and "mean reward" not in shown, shown
+    assert int(found.group(1)) == RECENT_EPISODES
+    assert float(found.group(2)) == round(float(np.mean(returns[-RECENT_EPISODES:])), 4)
+
+
+def test_a_one_step_task_shows_the_mean_reward_of_its_last_block(capsys):
+    import re
+
+    from somarm import run
+
+    result = run.train(run.RunConfig(task="reach2", n_trials=3, n_steps=1000, seed=1), progress=True)
+    shown = _last_bar_line(capsys.readouterr().err)
+    found = re.search(r"mean reward ([-+]\d+\.\d+)", shown)
+    assert found and "return" not in shown, shown
+    assert float(found.group(1)) == round(float(result.block_means[-1].mean()), 4)
