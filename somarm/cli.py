@@ -276,9 +276,13 @@ def _cmd_forward(module: str, argv: list[str]) -> int:
     return int(importlib.import_module(module).main(argv) or 0)
 
 
-def _parser() -> argparse.ArgumentParser:
-    from somarm import run
-    from somarm.sweep import cli as sweep_cli
+def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
+    """The command line's parser; with ``commands``, only those commands get the options that need the run
+    machinery imported (``train``'s and ``sweep``'s run settings), so that a listing or ``--help`` answers
+    at once. None: every command complete (the docs' reference)."""
+
+    def complete(command: str) -> bool:
+        return commands is None or command in commands
 
     parser = OneLineParser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
@@ -288,7 +292,10 @@ def _parser() -> argparse.ArgumentParser:
     presets_cmd.set_defaults(func=_cmd_presets)
 
     train = sub.add_parser("train", help="train headless and write a run folder")
-    run.add_options(train)  # every run setting, its default and help, from RunConfig
+    if complete("train"):
+        from somarm import run
+
+        run.add_options(train)  # every run setting, its default and help, from RunConfig
     train.add_argument("--out", help="run folder (default runs/TASK__LEARNER__seedS)")
     train.add_argument("--force", action="store_true", help="replace the run already in --out")
     train.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
@@ -358,8 +365,12 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
 
     sweep = sub.add_parser("sweep", help="search learner settings and task parameters over seeds")
-    run.add_options(sweep, leave_out=("trial_ids",))  # the run every point starts from; --seed is the first seed
-    sweep_cli.add_options(sweep)
+    if complete("sweep"):
+        from somarm import run
+        from somarm.sweep import cli as sweep_cli
+
+        run.add_options(sweep, leave_out=("trial_ids",))  # the run every point starts from; --seed is the first seed
+        sweep_cli.add_options(sweep)
     sweep.set_defaults(func=_cmd_sweep)
     return parser
 
@@ -389,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_forward(f"somarm.benchmarks.{argv[1]}", argv[2:])
         if argv[:1] == ["view"]:
             return _cmd_forward("somarm.viewer.cli", argv[1:])
-        args = _parser().parse_args(argv)
+        args = _parser(argv[:1]).parse_args(argv)  # only the command named is built whole
         status = args.func(args)
         if args.command in _OUTPUT_COMMANDS and _output_lost():  # their output is what they are for
             raise ValueError(f"cannot write the output to stdout: {sys.stdout.reason}")

@@ -350,3 +350,28 @@ def test_the_python_api_refuses_a_setting_of_the_wrong_type_in_one_line(field, v
 
     with pytest.raises(ValueError, match=f"^{field} must be a"):
         run.RunConfig(task="reach2", **{field: value}).resolved()
+
+
+@pytest.mark.parametrize(("argv", "unwanted"), [
+    (["--help"], ("numba", "mujoco", "dm_control", "matplotlib", "torch", "gymnasium", "ray")),
+    (["presets"], ("mujoco", "dm_control", "matplotlib", "torch", "gymnasium", "ray")),
+    (["tasks"], ("matplotlib", "torch", "gymnasium", "ray", "somarm.run", "somarm.sweep")),
+])
+def test_listing_commands_import_only_what_they_need(argv, unwanted):
+    # What the listings answer from, and nothing else: the run machinery, the plots and the extras load
+    # only for the commands that use them (their time is scripts/bench_startup.py's to measure).
+    code = ("import sys, contextlib, io\nfrom somarm.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    try:\n        main(sys.argv[1:])\n    except SystemExit:\n        pass\n"
+            f"print(' '.join(m for m in {unwanted!r} if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "", done.stdout + done.stderr
+
+
+def test_the_full_parser_and_the_one_a_command_builds_agree():
+    from somarm.cli import _parser
+
+    full, own = _parser(), _parser(["train"])
+    train = full._subparsers._group_actions[0].choices["train"]._actions
+    assert [a.dest for a in train] == [a.dest for a in own._subparsers._group_actions[0].choices["train"]._actions]
+    assert {"task", "learner", "seed", "n_trials", "n_steps"} <= {a.dest for a in train}  # the run settings
