@@ -70,8 +70,9 @@ def peers_missing() -> str | None:
         import stable_baselines3  # noqa: F401
         import torch  # noqa: F401
     except ImportError as exc:
-        return (f"td3 and sac need the optional extra 'peers' ({exc.name} is missing): "
-                f"pip install -e \".[peers]\" (see the README for a CPU-only torch)")
+        from somarm.extras import install_command
+
+        return f"td3 and sac need the optional extra 'peers' ({exc.name} is missing): {install_command('peers')}"
     return None
 
 

@@ -90,8 +90,9 @@ def zoo_entry(kind: str, env_id: str) -> dict[str, Any] | None:
     except ImportError:
         folder = None
     if folder is None:
-        raise ValueError("the Zoo's hyperparameters need the optional extra 'peers' (rl-zoo3 and pyyaml): "
-                         "pip install -e \".[peers]\"")
+        from somarm.extras import missing
+
+        raise missing("peers", "the Zoo's hyperparameters need the optional extra 'peers' (rl-zoo3 and pyyaml)")
     with open(folder / f"{kind}.yml") as handle:
         table = yaml.safe_load(handle)
     return table.get(env_id)

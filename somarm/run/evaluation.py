@@ -85,7 +85,9 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
       the step limit (where ``run_episodes`` cuts it); and the mean undiscounted return per episode.
       A trial that reaches the goal once in 100 episodes thus has a mean length near the step limit,
       not the length of its one success. Also ``"lengths"`` and ``"success"``, ``(n_trials, n_episodes)``:
-      every episode's steps and whether it reached the goal.
+      every episode's steps and whether it reached the goal; and, for a task that caps its greedy
+      episodes below their own end (a Gymnasium task's ``evaluation_steps``), ``"cut"``: whether the
+      cap cut each.
 
     Raises:
       ValueError: a task without whole episodes, or a bad ``n_episodes``.
@@ -105,6 +107,8 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
         "mean_return": episodes["returns"].reshape(n_trials, n_episodes).mean(axis=1),
         "lengths": lengths,
     }
+    if "cut" in episodes:  # the task's cap on greedy episodes cut these before their own end
+        out["cut"] = episodes["cut"].reshape(n_trials, n_episodes)
     if "success" in episodes:  # a task with a goal says whether each episode reached it
         out["success"] = episodes["success"].reshape(n_trials, n_episodes)
         out["success_rate"] = out["success"].mean(axis=1)

@@ -3,7 +3,8 @@
 Training reads a flag between steps (``stop_between_steps``), so a run never stops between a
 learner's ``act`` and ``learn``; outside the training loop (``somarm reproduce``, the writing of a
 run folder) SIGTERM is made to behave like Ctrl-C (``sigterm_as_interrupt``), so a stopped
-command still keeps what it finished.
+command still keeps what it finished. Work whose result may be dropped, such as a greedy evaluation,
+is cut short at once (``cut_short_by_signals``), even where the signals are being held back for a write.
 """
 
 from __future__ import annotations
@@ -14,10 +15,18 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import TypeVar
 
 __all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred", "start_deaf_to_ctrl_c",
-           "end_with_parent"]
+           "end_with_parent", "cut_short_by_signals"]
+
+T = TypeVar("T")
+
+
+class _Cut(BaseException):
+    """Raised by the handler of ``cut_short_by_signals`` (a BaseException, as KeyboardInterrupt is, so
+    that no ``except Exception`` of the work swallows it)."""
 
 
 @contextlib.contextmanager
@@ -59,6 +68,40 @@ def signals_deferred() -> Iterator[dict[str, int]]:
         yield held
     if held["signal"]:
         raise KeyboardInterrupt
+
+
+def cut_short_by_signals(work: Callable[[], T]) -> tuple[T | None, int]:
+    """``work()``, cut short by the first Ctrl-C or SIGTERM that arrives while it runs.
+
+    Returns ``(work's value, 0)``, or ``(None, the signal)`` when a signal cut it. The signal is then
+    handed on to the handler that was there before, as if it had arrived just now: where the signals
+    are held back for a write (``signals_deferred``) the command still ends as interrupted once it has
+    written, and where Ctrl-C raises ``KeyboardInterrupt`` it is raised here. Signals being ignored
+    stay ignored; outside the main thread ``work`` runs as it is.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return work(), 0
+    got = {"signal": 0, "working": True}
+
+    def cut(signum, frame):
+        if not got["signal"]:
+            got["signal"] = signum
+            if got["working"]:  # once the work is over, a signal is only noted (and handed on below)
+                raise _Cut
+
+    value = None
+    try:
+        with _handled_by(cut):
+            try:
+                value = work()
+            finally:
+                got["working"] = False
+    except _Cut:
+        pass
+    if got["signal"]:
+        signal.raise_signal(got["signal"])
+        return None, got["signal"]
+    return value, 0
 
 
 def sigterm_as_interrupt() -> None:

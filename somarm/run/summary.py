@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+import time
 from typing import Any
 
 import numpy as np
@@ -27,7 +29,10 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
     ``GREEDY_EPISODES`` whole greedy episodes per trial instead, since one step from rest says
     nothing of where an episode goes: ``greedy_mean_return`` and ``greedy_sd_return`` (the
     undiscounted return per episode, mean over episodes per trial, then mean and sd over trials),
-    ``greedy_success_rate`` (episodes reaching the goal, over all trials; a task with a goal only), and
+    ``greedy_success_rate`` (episodes reaching the goal, over all trials; a task with a goal only),
+    ``greedy_episodes_cut`` and ``greedy_episode_cap`` (where the task's cap on greedy episodes cut
+    some before their own end, as a Gymnasium task's ``evaluation_steps`` does: how many, over all
+    trials, and the cap), and
     ``greedy_mean_episode_length`` (steps over all episodes, a failed episode counting at the step
     limit), ``greedy_episodes``, and beside the greedy length ``shortest_mean_episode_length``: the
     mean over the same episodes of the shortest path from each start (``task.shortest_lengths``; a search
@@ -48,6 +53,9 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
         }
         if "success_rate" in episodes:  # a task with a goal says whether each episode reached it
             measures["greedy_success_rate"] = float(episodes["success_rate"].mean())
+        if "cut" in episodes and episodes["cut"].any():  # the returns are over the cap's steps, not whole episodes
+            measures["greedy_episodes_cut"] = int(episodes["cut"].sum())
+            measures["greedy_episode_cap"] = int(episodes["lengths"][episodes["cut"]].max())
         if shortest and task.has_shortest_paths:
             lengths = evaluation.shortest_lengths(task, n_episodes=GREEDY_EPISODES, seed=seed)
             measures["shortest_mean_episode_length"] = float(lengths.mean())
@@ -78,15 +86,32 @@ def greedy_summary(result: RunResult, n_observations: int = 1000, *, shortest: b
     """The summary keys of the run's greedy evaluation (``greedy_measures``, seeded by the run's seed;
     ``shortest``: with an episodic task's shortest paths).
 
-    A failed evaluation gives ``{"greedy_error": message}`` instead, so the run is still written.
+    A failed evaluation gives ``{"greedy_error": message}`` instead, so the run is still written. So
+    does one that Ctrl-C or SIGTERM cuts short (``stopping.cut_short_by_signals``: the signal is then
+    handed on, so a command that holds signals back while it writes ends as interrupted after writing),
+    with ``"greedy_cut": true``; the run then counts as interrupted (``result.interrupted``), so that it
+    does not replace an earlier run in its folder.
     """
+    from somarm.run.stopping import cut_short_by_signals
+
     if result.steps_done == 0:
         return {}
-    try:
-        return greedy_measures(result.learner, result.task, seed=result.config.seed, n_observations=n_observations,
-                               shortest=shortest)
-    except ValueError as exc:
-        return {"greedy_error": str(exc)}
+
+    def measure() -> dict[str, Any]:
+        try:
+            return greedy_measures(result.learner, result.task, seed=result.config.seed,
+                                   n_observations=n_observations, shortest=shortest)
+        except ValueError as exc:
+            return {"greedy_error": str(exc)}
+
+    started = time.perf_counter()
+    measures, signum = cut_short_by_signals(measure)
+    if signum:
+        result.interrupted = True
+        return {"greedy_error": f"stopped by {signal.Signals(signum).name} after "
+                                f"{time.perf_counter() - started:.1f} s: the trained run is written without it "
+                                "(somarm evaluate scores it)", "greedy_cut": True}
+    return measures
 
 
 def _number_or_none(x: float) -> float | None:

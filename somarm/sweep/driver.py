@@ -68,7 +68,9 @@ def run_sweep(
     if address and engine != "ray":
         raise ValueError("--address joins a Ray cluster: it needs --engine ray")
     if engine == "ray" and importlib.util.find_spec("ray") is None:
-        raise ValueError('the ray engine needs Ray Tune: pip install -e ".[sweep]"')
+        from somarm.extras import missing
+
+        raise missing("sweep", "the ray engine needs Ray Tune")
     spec = spec.check()
     points = spec.points()
     validate_points(spec, points)

@@ -97,7 +97,9 @@ def run_ray(
     try:
         from ray import tune
     except ImportError:
-        raise ValueError('the ray engine needs Ray Tune: pip install -e ".[sweep]"') from None
+        from somarm.extras import missing
+
+        raise missing("sweep", "the ray engine needs Ray Tune") from None
     started = _start(address, workers)
     try:
         storage = (out / "ray").resolve()

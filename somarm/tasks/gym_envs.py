@@ -20,15 +20,26 @@ parameter (``observation_low``, ``observation_high``), so the run's ``config.jso
 a loaded run reuses it. Actions are the action ``Box``'s, in its own units.
 
 Any other ``--task-set KEY=VALUE`` is a keyword argument of ``gymnasium.make`` (``g=5.0`` for
-Pendulum, ``max_episode_steps=500``).
+Pendulum, ``max_episode_steps=500``), tried at set-up on one copy of the environment (made, reset and
+stepped once with the middle action), so a value the environment cannot take is refused in one line
+naming the key, the value and what the environment said, before anything is written. ``nan`` and
+``inf`` read as numbers; ``render_mode`` is refused (the copies render nothing: ``somarm view`` draws
+an environment's model). Any error of Gymnasium's while making an environment (an unknown or malformed
+id, a missing package) is a ``ValueError`` of one line.
+
+Greedy episodes (``run_episodes``) are cut, as a truncation, after ``evaluation_steps`` steps (the
+task's own key, default ``EVALUATION_STEPS``) where the environment's time limit is longer or absent,
+so an evaluation is bounded whatever ``max_episode_steps`` says; the episodes so cut are counted.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import json
 import math
+import warnings
 from typing import Any
 
 import numpy as np
@@ -43,15 +54,18 @@ __all__ = ["PREFIX", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_
 #: What a Gymnasium task name starts with.
 PREFIX = "gym:"
 #: Keys of ``--task-set`` that are the task's own (the rest go to ``gymnasium.make``).
-_OWN = ("observation_low", "observation_high")
+_OWN = ("observation_low", "observation_high", "evaluation_steps")
+#: Texts of ``--task-set`` that read as the float they spell (JSON knows only NaN and Infinity).
+_FLOAT_WORDS = ("nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 #: Random-action steps behind a bounds estimate, and the quantiles taken.
 _ESTIMATE_STEPS = 5000
 _QUANTILES = (0.01, 0.99)
 #: An observation bound this large counts as none (some environments give +-float32's largest value for
 #: an unbounded dimension): scaled from it, every observation would sit at 0.5, so it is estimated.
 _UNBOUNDED = 1e6
-#: Steps after which a greedy evaluation episode is cut (as a truncation) where the environment sets
-#: no time limit of its own.
+#: Steps after which a greedy evaluation episode is cut (as a truncation) where the environment's own
+#: time limit is longer or absent (``--task-set evaluation_steps=N`` sets another cap): the benchmarks'
+#: limits (50 to 1,000 steps) lie within it.
 EVALUATION_STEPS = 1000
 
 #: The benchmarks with presets of their own (``somarm.learners.presets``) and default steps; any
@@ -108,6 +122,7 @@ class GymParams:
     kwargs: tuple[tuple[str, Any], ...] = ()  #: keyword arguments of ``gymnasium.make``, sorted by key
     observation_low: tuple[float, ...] | None = None  #: the scaling's low per dimension (None: the Box's)
     observation_high: tuple[float, ...] | None = None  #: the scaling's high per dimension
+    evaluation_steps: int | None = None  #: greedy episodes cut after this many steps (None: ``EVALUATION_STEPS``)
 
     def make_env(self):
         """A new copy of the environment (``gymnasium.make``)."""
@@ -126,35 +141,89 @@ def _gymnasium():
     try:
         import gymnasium
     except ImportError:
-        raise ValueError("gym: tasks need gymnasium: pip install 'somarm[gym]'") from None
+        from somarm.extras import missing
+
+        raise missing("gym", "gym: tasks need gymnasium") from None
     return gymnasium
+
+
+def _said(exc: BaseException) -> str:
+    """What an environment said when it failed: ``TypeError: its message's first line``."""
+    return f"{type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0]}"
+
+
+def _shown(kwargs: dict[str, Any]) -> str:
+    """Keywords as a user gave them: ``g='abc', max_episode_steps=10``."""
+    return ", ".join(f"{key}={value!r}" for key, value in kwargs.items())
 
 
 @functools.lru_cache(maxsize=64)
 def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
-    """The spaces and time limit of environment ``env_id`` made with ``kwargs`` (JSON), read once.
+    """The spaces and time limit of environment ``env_id`` made with ``kwargs`` (JSON), read once from
+    a copy made, reset and stepped once (the middle action), so that a keyword the environment cannot
+    take fails here and not in a run.
 
     Raises:
-      ValueError: an unknown id, a missing extra, a keyword the environment refuses, or a space
-        that is not a ``Box`` (one line saying why).
+      ValueError: an unknown or malformed id, a missing extra (``MissingExtra``), a keyword the
+        environment refuses at make, reset or its first step (the key named), non-finite observations
+        or rewards, or a space that is not a ``Box`` (one line saying why).
     """
+    kwargs = json.loads(kwargs_json)
+    try:
+        return _describe(env_id, kwargs)
+    except _Failed as failed:
+        if len(kwargs) > 1:  # name the keyword that fails alone, where one does
+            for key, value in kwargs.items():
+                try:
+                    describe(env_id, json.dumps({key: value}))
+                except ValueError as alone:
+                    raise alone from None
+        raise ValueError(failed.message(PREFIX + env_id, kwargs)) from None
+
+
+class _Failed(Exception):
+    """The environment failed where it was made, reset or stepped (``describe`` names the keywords)."""
+
+    def __init__(self, when: str, said: str):
+        super().__init__(said)
+        self.when, self.said = when, said
+
+    def message(self, name: str, kwargs: dict[str, Any]) -> str:
+        if not kwargs:
+            return f"{name} fails {self.when} ({self.said})"
+        keys = " and ".join(kwargs)
+        return (f"{name} with keyword{'s' if len(kwargs) > 1 else ''} {_shown(kwargs)} fails {self.when} "
+                f"({self.said}); give {keys} a value the environment takes, or leave "
+                f"{'them' if len(kwargs) > 1 else 'it'} out")
+
+
+def _describe(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
     _gymnasium()  # a one-line error where Gymnasium is missing
     from gymnasium import error, spaces
 
+    from somarm.extras import missing
+
     name = PREFIX + env_id
     try:
-        env = _make(env_id, json.loads(kwargs_json))
+        env = _make(env_id, kwargs)
     except (error.NameNotFound, error.NamespaceNotFound, error.VersionNotFound, error.UnregisteredEnv) as exc:
         raise ValueError(f"unknown Gymnasium environment {env_id!r} ({exc}); give a registered id, "
                          "such as gym:Pendulum-v1") from None
     except error.DependencyNotInstalled as exc:
-        raise ValueError(f"{name} needs a package that is not installed ({str(exc).splitlines()[0]}); "
-                         "pip install 'somarm[gym]' holds gymnasium's MuJoCo environments") from None
+        raise missing("gym", f"{name} needs a package that is not installed ({str(exc).splitlines()[0]}); "
+                      "the gym extra holds gymnasium's MuJoCo environments") from None
+    except error.Error as exc:  # a malformed id, and whatever else Gymnasium refuses at make
+        raise ValueError(f"{name} is not an environment Gymnasium can make ({_said(exc)}); give a "
+                         "registered id, such as gym:Pendulum-v1") from None
     except TypeError as exc:
-        raise ValueError(f"{name} does not take these parameters: {exc}") from None
+        if kwargs:
+            raise ValueError(f"{name} does not take these parameters: {exc}") from None
+        raise _Failed("when made", _said(exc)) from None
     except ImportError as exc:
-        raise ValueError(f"{name} needs a package that is not installed ({exc}); "
-                         "pip install 'somarm[gym]' holds gymnasium's MuJoCo environments") from None
+        raise missing("gym", f"{name} needs a package that is not installed ({exc}); "
+                      "the gym extra holds gymnasium's MuJoCo environments") from None
+    except Exception as exc:  # the environment's own check of a keyword's value
+        raise _Failed("when made", _said(exc)) from None
     try:
         for what, space in (("observation", env.observation_space), ("action", env.action_space)):
             if not isinstance(space, spaces.Box) or len(space.shape) != 1:
@@ -165,6 +234,7 @@ def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
         action_high = np.asarray(env.action_space.high, dtype=np.float64)
         if not (np.isfinite(action_low).all() and np.isfinite(action_high).all()):
             raise ValueError(f"{name} has an unbounded action Box; somarm's action map needs finite bounds")
+        _first_step(env, (action_low + action_high) / 2.0)
         observation_low = np.asarray(env.observation_space.low, dtype=np.float64)
         observation_high = np.asarray(env.observation_space.high, dtype=np.float64)
         return {
@@ -177,7 +247,38 @@ def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
             "mujoco": hasattr(env.unwrapped, "model") and type(env.unwrapped.model).__name__ == "MjModel",
         }
     finally:
-        env.close()
+        with contextlib.suppress(Exception):  # a copy that failed may fail to close as well
+            env.close()
+
+
+def _first_step(env, action: np.ndarray) -> None:
+    """Reset ``env`` and step it once with ``action``; raise ``_Failed`` where it fails or answers with
+    a non-finite observation or reward."""
+    with warnings.catch_warnings():  # Gymnasium's checker would warn of what is refused here in one line
+        warnings.simplefilter("ignore")
+        try:
+            observation, _ = env.reset(seed=0)
+        except Exception as exc:
+            raise _Failed("at reset", _said(exc)) from None
+        try:
+            after, reward, *_ = env.step(action.astype(env.action_space.dtype))
+        except Exception as exc:
+            raise _Failed("at its first step", _said(exc)) from None
+    for when, values in (("at reset", observation), ("at its first step", after)):
+        values = np.asarray(values, dtype=np.float64)
+        if not np.isfinite(values).all():
+            raise _Failed(when, f"its observation {np.array2string(values, precision=3)} is not finite; "
+                                "somarm needs finite observations")
+    if not np.isfinite(float(reward)):
+        raise _Failed("at its first step", f"its reward {float(reward)} is not finite")
+
+
+def _as_number(value: Any) -> Any:
+    """``nan``, ``inf`` and ``-inf`` written as text read as the floats they spell, as ``1e308`` reads as a
+    number (JSON spells them only ``NaN`` and ``Infinity``); any other value as it is."""
+    if isinstance(value, str) and value.strip().lower() in _FLOAT_WORDS:
+        return float(value)
+    return value
 
 
 def _kwargs_json(params: GymParams) -> str:
@@ -218,7 +319,16 @@ def estimate_bounds(params: GymParams, seed: int) -> tuple[tuple[float, ...], tu
                 observation, _ = env.reset(seed=int(rng.integers(2**31)))
     finally:
         env.close()
-    low_q, high_q = np.quantile(np.array(seen), _QUANTILES, axis=0)
+    seen = np.array(seen)
+    if not np.isfinite(seen).all():
+        unbounded = [int(k) for k in np.flatnonzero(~np.isfinite(facts["observation_low"])
+                                                    | ~np.isfinite(facts["observation_high"]))]
+        bad = [int(k) for k in np.flatnonzero(~np.isfinite(seen).all(axis=0))]
+        raise ValueError(f"{PREFIX}{params.env_id}'s observation Box is infinite in dimension(s) {unbounded}, so "
+                         "somarm estimates its scaling from observations under random actions, but the "
+                         f"environment gave non-finite observations (nan or inf) in dimension(s) {bad}; give "
+                         "observation_low and observation_high")
+    low_q, high_q = np.quantile(seen, _QUANTILES, axis=0)
     margin = 0.1 * np.maximum(high_q - low_q, 1e-3)
     box_low, box_high = facts["observation_low"], facts["observation_high"]
     low = np.where(np.isfinite(box_low), box_low, low_q - margin)
@@ -264,6 +374,8 @@ class GymTask(TaskBase):
         self.action_low, self.action_high = facts["action_low"], facts["action_high"]
         self.action_dtype = facts["action_dtype"]
         self.max_episode_steps = facts["max_episode_steps"]
+        #: greedy episodes (``run_episodes``) are cut after this many steps where the time limit is longer or absent
+        self.evaluation_steps = params.evaluation_steps
         self._generators = trial_generators(seed, self.trial_ids, "task")
         self._envs = [params.make_env() for _ in range(self.n_trials)]
         self._eval_envs: list[Any] = []
@@ -368,10 +480,12 @@ class GymTask(TaskBase):
         """Whole episodes of ``policy`` (scaled observations ``(m, obs_dim)`` -> actions ``(m, action_dim)``)
         from the reset seeds ``starts`` ``(m,)``, all in lockstep, each to its termination or time limit.
 
-        An environment without a time limit has its episodes cut after ``EVALUATION_STEPS`` steps.
+        An episode is cut (as a truncation) after ``evaluation_steps`` steps (default
+        ``EVALUATION_STEPS``) where the environment's time limit is longer or absent.
 
         Returns:
-          ``{"length": (m,) steps, "returns": (m,) undiscounted, "terminated": (m,) bools}``; with
+          ``{"length": (m,) steps, "returns": (m,) undiscounted, "terminated": (m,) bools, "cut": (m,)
+          bools (the episode was cut at ``evaluation_steps``, before its own end)}``; with
           ``paths`` also ``"path"``: each episode's raw observations, ``(m, longest + 1, obs_dim)``,
           held at the last once the episode is over.
         """
@@ -385,7 +499,9 @@ class GymTask(TaskBase):
         length = np.zeros(m, dtype=np.int64)
         returns = np.zeros(m)
         terminated = np.zeros(m, dtype=bool)
-        limit = self.max_episode_steps or EVALUATION_STEPS
+        cap = self.evaluation_steps or EVALUATION_STEPS
+        limit = min(self.max_episode_steps or cap, cap)
+        cut = np.zeros(m, dtype=bool)
         trace = [self.unscale(current)] if paths else None
         while running.any():
             actions = np.clip(np.asarray(policy(current), dtype=np.float64), self.action_low, self.action_high)
@@ -396,9 +512,10 @@ class GymTask(TaskBase):
                 length[i] += 1
                 terminated[i] = term
                 running[i] = not (term or trunc) and length[i] < limit
+                cut[i] = not (term or trunc) and length[i] >= limit
             if paths:
                 trace.append(self.unscale(current))
-        out = {"length": length, "returns": returns, "terminated": terminated}
+        out = {"length": length, "returns": returns, "terminated": terminated, "cut": cut}
         if paths:
             out["path"] = np.stack(trace, axis=1)
         return out
@@ -408,14 +525,30 @@ class GymRecord(TaskRecord):
     """The record of one ``gym:ID`` task, made on demand: any keyword goes to ``gymnasium.make``."""
 
     def params_from(self, given: dict[str, Any]) -> GymParams:
-        given = dict(given)
+        """The params of ``given`` (``--task-set`` values, typed), tried on one copy of the environment.
+
+        Raises:
+          ValueError: ``render_mode``, a bad ``max_episode_steps``, ``evaluation_steps`` or scaling
+            bound, or a keyword the environment cannot take (``describe``; one line naming it).
+        """
+        given = {key: _as_number(value) for key, value in given.items()}
+        if "render_mode" in given:
+            raise ValueError(f"render_mode={given['render_mode']!r} is not taken by {self.name}: somarm's "
+                             "copies of the environment render nothing (somarm view draws its model); leave it out")
+        for key in ("max_episode_steps", "evaluation_steps"):
+            if key in given:
+                value = given[key]
+                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                    raise ValueError(f"{key} of {self.name} takes a whole number of steps >= 1, got {value!r}")
         own = {key: given.pop(key) for key in _OWN if key in given}
-        for key, value in own.items():
+        for key in ("observation_low", "observation_high"):
+            value = own.get(key)
             if value is not None and (not isinstance(value, (list, tuple)) or not all(
                     isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)):
                 raise ValueError(f"{key} takes a JSON list of finite numbers, one per observation dimension, got {value!r}")
-        params = GymParams(self.params_env_id, tuple(sorted(given.items())),
-                           *(tuple(own[k]) if own.get(k) is not None else None for k in _OWN))
+        bounds = (tuple(own[k]) if own.get(k) is not None else None for k in ("observation_low", "observation_high"))
+        params = GymParams(self.params_env_id, tuple(sorted(given.items())), *bounds,
+                           evaluation_steps=own.get("evaluation_steps"))
         facts = describe(params.env_id, _kwargs_json(params))
         _check_bounds(params, facts["observation_low"].size)
         return params

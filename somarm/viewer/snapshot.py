@@ -35,7 +35,9 @@ def _check_browser() -> None:
     try:
         import playwright.sync_api  # noqa: F401
     except ImportError:
-        raise ValueError("Playwright for Python is needed (pip install playwright; no browser download)") from None
+        from somarm.extras import missing
+
+        raise missing("test", "Playwright for Python is needed (no browser download)") from None
 
 
 def screenshot_url(url: str, out: str | Path, *, wait_s: float = 1.0, at_s: float | None = None,

@@ -1,6 +1,7 @@
 """Gymnasium environments as tasks (``gym:ID``): refusals, seeding, truncation, scaling, parity."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -10,6 +11,7 @@ import pytest
 from gymnasium import spaces
 
 from somarm import run, tasks
+from somarm.extras import install_command
 from somarm.learners.schedules import Schedule
 from somarm.learners.somq import SOMQConfig
 from somarm.run import RunConfig
@@ -105,7 +107,8 @@ def test_the_truncation_target_is_exact_where_every_step_bootstraps():
     ("gym:NoSuchThing-v0", r"^unknown Gymnasium environment 'NoSuchThing-v0' .*; give a registered id, such as "
                            r"gym:Pendulum-v1$"),
     ("gym:somarmtest/NeedsAPackage-v0", r"^gym:somarmtest/NeedsAPackage-v0 needs a package that is not installed "
-                                        r"\(box2d is not installed\); pip install 'somarm\[gym\]'"),
+                                        r"\(box2d is not installed\); the gym extra holds gymnasium's MuJoCo "
+                                        r"environments: " + re.escape(install_command("gym")) + "$"),
     ("gym:", r"^'gym:' names no environment; give gym:ID, such as gym:Pendulum-v1$"),
 ])
 def test_an_environment_that_does_not_qualify_is_refused_in_one_line(name, message):
