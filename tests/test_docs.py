@@ -97,3 +97,39 @@ def test_the_site_builds_strictly_with_the_generated_pages(tmp_path):
     changelog = (site / "changelog.html").read_text()
     assert "0.1.0" in changelog and "Unreleased" in changelog and "included here" not in changelog
     assert (site / "reproduce" / "REPORT.html").exists()
+
+
+def _claims(path: Path) -> list[dict]:
+    import json
+
+    return [c for part in json.loads(path.read_text())["experiments"].values() for c in part["claims"]]
+
+
+def test_the_claim_counts_in_the_readme_and_the_home_page_are_the_reports_own():
+    """Read from the committed claims files: the paper's report, and the two parts beyond the paper that
+    a default `somarm reproduce` runs (driven_arm, beyond)."""
+    paper = _claims(ROOT / "docs" / "reproduce" / "claims.json")
+    beyond = _claims(ROOT / "docs" / "reproduce" / "driven_arm" / "claims.json") + _claims(
+        ROOT / "docs" / "beyond" / "claims.json")
+    seeds = {c["seeds"] for c in paper}
+    assert len(seeds) == 1
+    (n,) = seeds
+    every = sum(c["holds_in"] == n for c in paper)
+    undecided = sum(all(s["holds"] is None for s in c["per_seed"]) for c in paper)
+    never = sum(all(s["holds"] is False for s in c["per_seed"]) for c in paper)
+    some = sorted((c["holds_in"] for c in paper if 0 < c["holds_in"] < n), reverse=True)
+    for page in (README, ROOT / "docs" / "index.md"):
+        text = " ".join(page.read_text().split())
+        default = re.search(r"checks (\d+) claims: the paper's (\d+) and (\d+) beyond it", text)
+        assert default, f"{page.name} states the default run's claims"
+        assert tuple(map(int, default.groups())) == (len(paper) + len(beyond), len(paper), len(beyond))
+    text = " ".join(README.read_text().split())
+    said = re.search(r"of the paper's (\d+) claims, (\d+) hold at every seed, (.*?); (\d+) are undecided and (\d+) "
+                     r"do not hold at any seed", text)
+    assert said, "the README states the committed report's verdicts"
+    assert (int(said.group(1)), int(said.group(2)), int(said.group(4)), int(said.group(5))) == (
+        len(paper), every, undecided, never)
+    # The claims that hold at some seeds, each "K at H of N": as many as the report has, at the same H.
+    partly = re.findall(r"(\d+) at (\d+) of (\d+)", said.group(3))
+    stated = sorted((int(h) for k, h, _ in partly for _ in range(int(k))), reverse=True)
+    assert stated == some and all(int(total) == n for _, _, total in partly)

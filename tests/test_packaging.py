@@ -26,6 +26,20 @@ def test_every_subpackage_and_the_models_are_packaged():
     assert {"arm2.xml", "arm20.xml", "launcher.xml"} <= {p.name for p in (ROOT / "models").glob("*.xml")}
 
 
+def test_every_data_file_of_the_package_is_package_data():
+    # A file the code reads beside its module (the viewer's page.js, the reproduction's durations.json)
+    # ships only when package-data names it: a wheel without it would fail where a clone works.
+    import fnmatch
+
+    data = _pyproject()["tool"]["setuptools"]["package-data"]
+    files = [p for p in (ROOT / "somarm").rglob("*") if p.is_file() and p.suffix not in (".py", ".pyc")
+             and "__pycache__" not in p.parts]
+    assert files
+    for path in files:
+        package = ".".join(path.parent.relative_to(ROOT).parts)
+        assert any(fnmatch.fnmatch(path.name, pattern) for pattern in data.get(package, [])), path
+
+
 def test_license_is_an_spdx_string_with_a_setuptools_that_reads_it_and_a_license_file():
     project = _pyproject()
     assert project["project"]["license"] == "MIT"
