@@ -21,7 +21,8 @@ from somarm.learners.reference import ReferenceSOMQ
 from somarm.learners.somq import SOMQ, SOMQConfig
 from somarm.validation import OneLineParser, check_int, check_int_list, whole_number
 
-__all__ = ["Case", "CASES", "time_batched", "time_reference", "interpolated_rows", "main"]
+__all__ = ["Case", "CASES", "REPRESENTATIONS", "time_batched", "time_reference", "interpolated_rows",
+           "representation_rows", "main"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,18 @@ CASES = (
     Case("50x1 in, 50x1 act, 20-D (Table 1)", get("table1"), 2, 20),
     Case("10x10 in, 8x1 act, 2-D (Table 2)", get("table2"), 2, 2),
     Case("30x1 in, 30x1 act, 2-D (Table 5)", get("table5"), 1, 2),
+)
+
+
+#: The input representations (``input_groups``, ``k_nearest``, ``grow_every``) at Reacher-v5's size: 10
+#: observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
+REPRESENTATIONS = (
+    ("one 20x20 map (the paper's)", {}),
+    ("one 20x20 map, 3 nearest", {"k_nearest": 3}),
+    ("45 pair maps of 10x10", {"input_groups": "pairs", "input_shape": (10, 10)}),
+    ("45 pair maps of 10x10, 3 nearest", {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3}),
+    ("45 pair maps growing to 10x10", {"input_groups": "pairs", "input_shape": (10, 10), "grow_every": 1000}),
+    ("5 maps of 10x10 (chunks:2)", {"input_groups": "chunks:2", "input_shape": (10, 10)}),
 )
 
 
@@ -107,6 +120,26 @@ def interpolated_rows(n_steps: int, repeats: int, *, n_trials: int = 100, late: 
     return ratios
 
 
+def representation_rows(n_steps: int, repeats: int, *, trial_counts: tuple[int, ...] = (1, 5)) -> list[float]:
+    """Print each input representation's memory and cost per trial-step at Reacher-v5's size; returns the
+    microseconds (one per representation and trial count, best of ``repeats``)."""
+    from somarm.learners import memory_needed
+    from somarm.learners.presets import get as preset
+
+    print("\ninput representations at Reacher-v5's size (10 observed dimensions, 3x3 torques, the reacher "
+          "preset), from t = 0")
+    print(f"{'representation':36s} {'n_trials':>8s} {'us/trial-step':>14s} {'MB per trial':>13s}")
+    micros = []
+    for label, changes in REPRESENTATIONS:
+        case = Case(label, preset("reacher").with_changes(changes), 10, 2)
+        bytes_one = memory_needed("somq", case.config, n_trials=1, obs_dim=10, action_dim=2)[1]
+        bytes_two = memory_needed("somq", case.config, n_trials=2, obs_dim=10, action_dim=2)[1]
+        for n_trials in trial_counts:
+            micros.append(1e6 * min(time_batched(case, n_trials, n_steps) for _ in range(repeats)))
+            print(f"{label:36s} {n_trials:8d} {micros[-1]:14.2f} {(bytes_two - bytes_one) / 1e6:13.3f}")
+    return micros
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the table; returns 0 (the targets are reported, not enforced)."""
     parser = OneLineParser(prog="somarm bench learner", description=__doc__.splitlines()[0])
@@ -139,4 +172,5 @@ def main(argv: list[str] | None = None) -> int:
         print(f"target (n_trials = 100, 50x50 maps, 2-D actions: <= 1 us per trial-step and >= 20x the "
               f"reference): {verdict[0]:.3f} us, {verdict[1]:.0f}x -> {'met' if met else 'NOT met'}")
     interpolated_rows(n_steps, repeats)
+    representation_rows(n_steps, repeats)
     return 0

@@ -47,7 +47,7 @@ __all__ = ["GROUPINGS", "check_groups", "parse_groups", "group_table", "features
            "predict_kernel", "greedy_kernel"]
 
 #: The named groupings of ``input_groups`` (besides index lists and ``chunks:K``).
-GROUPINGS = ("all", "pairs", "singles")
+GROUPINGS = ("all", "pairs", "triples", "singles")
 
 
 def check_groups(text: str) -> str:
@@ -56,7 +56,7 @@ def check_groups(text: str) -> str:
     Raises:
       ValueError: one line naming the forms allowed.
     """
-    allowed = ("input_groups must be all, pairs, singles, chunks:K (K >= 1) or index lists such as "
+    allowed = ("input_groups must be all, pairs, triples, singles, chunks:K (K >= 1) or index lists such as "
                f"'0,1;2,3' (0-based, ';' between maps), got {text!r}")
     if not isinstance(text, str):
         raise ValueError(allowed)
@@ -83,8 +83,8 @@ def check_groups(text: str) -> str:
 def parse_groups(text: str, obs_dim: int) -> list[list[int]]:
     """The observed dimensions each map sees, ``[[0, 1], [2, 3], ...]``, for ``obs_dim`` dimensions.
 
-    ``all``: one map over every dimension; ``pairs``: one per pair ``(i, j)``, i < j (one map if
-    obs_dim is 1); ``singles``: one per dimension; ``chunks:K``: consecutive runs of K in index order
+    ``all``: one map over every dimension; ``pairs``: one per pair ``(i, j)``, i < j, ``triples`` one per
+    triple (one map over all of them where there are fewer); ``singles``: one per dimension; ``chunks:K``: consecutive runs of K in index order
     (the last one shorter); index lists as written.
 
     Raises:
@@ -94,8 +94,8 @@ def parse_groups(text: str, obs_dim: int) -> list[list[int]]:
     dims = list(range(obs_dim))
     if text == "all":
         return [dims]
-    if text == "pairs":
-        return [list(p) for p in itertools.combinations(dims, 2)] or [dims]
+    if text in ("pairs", "triples"):
+        return [list(p) for p in itertools.combinations(dims, 2 if text == "pairs" else 3)] or [dims]
     if text == "singles":
         return [[d] for d in dims]
     if text.startswith("chunks:"):

@@ -109,7 +109,7 @@ class SOMQConfig(ConfigBase):
 
     input_groups: str = "all"
     """Which observed dimensions each input map sees (``somarm.learners.groups``): ``all`` (one map over
-    every dimension, the paper's), ``pairs`` (one map per pair of dimensions), ``singles`` (one per
+    every dimension, the paper's), ``pairs`` or ``triples`` (one map per pair or triple of dimensions), ``singles`` (one per
     dimension), ``chunks:K`` (consecutive runs of K dimensions in index order) or index lists such as
     ``0,1;2,3`` (0-based, ';' between maps). Every map has ``input_shape`` units and its own Q-table over
     the one action map; their Q-values add, as tile coding's tilings do. A rule of thumb: groups of 2-3

@@ -55,6 +55,7 @@ def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
 def test_groupings_name_the_dimensions_each_map_sees():
     assert groups.parse_groups("all", 3) == [[0, 1, 2]]
     assert groups.parse_groups("pairs", 3) == [[0, 1], [0, 2], [1, 2]]
+    assert groups.parse_groups("triples", 4) == [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
     assert groups.parse_groups("singles", 2) == [[0], [1]]
     assert groups.parse_groups("chunks:2", 5) == [[0, 1], [2, 3], [4]]
     assert groups.parse_groups("0,3; 1", 4) == [[0, 3], [1]]
