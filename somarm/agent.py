@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 import zipfile
 import zlib
 from pathlib import Path
@@ -44,7 +45,11 @@ from somarm.protocols import BatchedTask, Learner
 from somarm.run import RunConfig
 from somarm.run.loop import EpisodeLog, Episodes, loop
 
-__all__ = ["SOMQ"]
+__all__ = ["SOMQ", "LearningInterrupted"]
+
+
+class LearningInterrupted(UserWarning):
+    """``SOMQ.learn`` was stopped by Ctrl-C or SIGTERM before it took every step asked for."""
 
 
 def _task_name(env: Any) -> tuple[str, dict[str, Any]]:
@@ -115,6 +120,7 @@ class SOMQ:
         self._log = EpisodeLog([self.task]) if self.task.episodic else None  # episodes spanning two learn()s
         self._wall_time = 0.0
         self._cannot_learn: str | None = None
+        self.interrupted = False  #: the last ``learn`` was stopped by Ctrl-C or SIGTERM before its end
 
     @property
     def num_timesteps(self) -> int:
@@ -124,11 +130,13 @@ class SOMQ:
     def learn(self, total_timesteps: int, *, progress_bar: bool = False) -> SOMQ:
         """Train every trial for ``total_timesteps`` more steps; returns the model (as SB3).
 
-        Ctrl-C stops at the end of a step and keeps what was learned.
+        Ctrl-C or SIGTERM stops at the end of a step and keeps what was learned; the model says so
+        with a ``LearningInterrupted`` warning and ``interrupted`` (True until the next ``learn``).
 
         Raises:
-          ValueError: ``total_timesteps`` is not a whole number >= 1, or the model was loaded from a
-            folder whose curves do not cover every step it took (one line).
+          ValueError: ``total_timesteps`` is not a whole number >= 1, a run that cannot fit in memory
+            (the refusal ``somarm train`` gives), or the model was loaded from a folder whose curves do
+            not cover every step it took (one line).
         """
         from somarm.validation import check_int
 
@@ -136,6 +144,7 @@ class SOMQ:
         if self._cannot_learn is not None:
             raise ValueError(self._cannot_learn)
         block = math.gcd(steps, 1000)
+        run.check_memory_needs([dataclasses.replace(self.config, n_steps=steps, block=block)])
         curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
                       progress=progress_bar, label=f"{self.config.task}/SOMQ", episode_log=self._log)
         done = self.learner.t
@@ -145,6 +154,10 @@ class SOMQ:
             shifted = dataclasses.replace(curves.episodes, ends=curves.episodes.ends + done - curves.steps_done)
             self._episodes.append(shifted)
         self._wall_time += curves.wall_time
+        self.interrupted = curves.interrupted
+        if curves.interrupted:
+            warnings.warn(f"SOMQ.learn was stopped by a signal after {curves.steps_done} of {steps} steps; the "
+                          f"model keeps what it learned (num_timesteps {done})", LearningInterrupted, stacklevel=2)
         return self
 
     def predict(self, observation: Any, *, deterministic: bool = True, trial: int = 0) -> tuple[np.ndarray, None]:

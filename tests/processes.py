@@ -25,3 +25,29 @@ def survivors_of_a_killed_parent(parent, pids, seconds: float) -> list[int]:
     parent.kill()
     parent.wait(timeout=30)
     return still_running(pids, seconds)
+
+
+def somarm_command(*argv: str) -> list[str]:
+    """The command line of ``somarm ARGV`` run from this checkout (``python -m somarm.cli``)."""
+    import sys
+
+    return [sys.executable, "-m", "somarm.cli", *argv]
+
+
+def checkout_env() -> dict[str, str]:
+    """The environment of a process started on this checkout: no OpenGL, this checkout first on the path."""
+    import os
+    from pathlib import Path
+
+    return dict(os.environ, MUJOCO_GL="disable", PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+
+
+def one_error_line(done, *needles: str) -> str:
+    """The ``subprocess.CompletedProcess`` ``done`` failed with exit code 2 and one ``somarm: error:`` line
+    holding every needle; that line."""
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("somarm: error: "), lines[0]
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    return lines[0]
