@@ -10,7 +10,8 @@ one thread per worker). It sends back each finished section, and this process al
 report, in the paper's order, after each one. A worker's results equal a run in this process:
 every experiment draws from its own seeds. While it trains, a worker sends its training parts'
 progress too (``somarm.run.progress.report_to``), which this process shows in one status line
-(``somarm.reproduce.status``).
+(``somarm.status``), its time left estimated from the experiments' measured durations
+(``durations.json``, ``expected_durations``).
 
 Workers start with Ctrl-C ignored, so a Ctrl-C at the terminal (or SIGTERM, which the command
 turns into Ctrl-C) reaches this process alone, which then sends every worker SIGTERM: that stops a
@@ -21,6 +22,7 @@ the same way and its one-line error is raised here.
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 import os
 import signal
@@ -32,10 +34,10 @@ from pathlib import Path
 
 from somarm.reproduce.common import Context, run_experiment
 from somarm.reproduce.report import Section
-from somarm.reproduce.status import Status, expected_durations
 from somarm.run.workers import outcome, start
+from somarm.status import Status
 
-__all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "run"]
+__all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "expected_durations", "run"]
 
 #: Start order: the experiments that take longest at the paper's counts first, so that the short
 #: ones fill the other workers' time (names not listed start last, in the order given).
@@ -46,6 +48,13 @@ LONGEST_FIRST_QUICK = ("throw_maps", "beyond", "more_inputs", "delayed_reward", 
                        "four_goals", "reach2", "reach20", "peers")
 #: Seconds a stopped worker gets to finish its step and exit before it is killed.
 _GRACE_S = 60.0
+
+
+def expected_durations(quick: bool, n_seeds: int) -> dict[str, float]:
+    """Each experiment's expected wall time in seconds on 2 cores under ``--jobs 2`` (``durations.json``),
+    times ``n_seeds``; experiments without a measure are left out."""
+    measured = json.loads((Path(__file__).with_name("durations.json")).read_text())
+    return {name: seconds * n_seeds for name, seconds in measured["quick" if quick else "full"].items()}
 
 
 def _worker(connection, out: Path, quick: bool, seeds: tuple[int, ...], backend: str, threads: int) -> None:
@@ -119,7 +128,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                 connection, process = idle.pop(0)
                 connection.send(experiments[name])
                 running[connection] = (name, process)
-                status.started(name, process.pid)
+                status.started(name, f"in process {process.pid}")
             for connection in wait(list(running), timeout=_status_period(status)):
                 name, process = running[connection]
                 try:

@@ -6,7 +6,7 @@ update (the run has started), then one at each tenth of the run or each minute, 
 first, and the final line once.
 
 In a worker process of ``somarm reproduce --jobs`` nothing is drawn: ``report_to`` hands every
-bar's step to the parent instead (``somarm.reproduce.status`` shows it), whether or not the bar
+bar's step to the parent instead (``somarm.status`` shows it), whether or not the bar
 itself is enabled.
 """
 

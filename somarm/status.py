@@ -1,7 +1,8 @@
-"""The parent's view of ``somarm reproduce --jobs N``: what is done, what runs, how far, and the time left.
+"""The status of work spread over worker processes or a cluster: what is done, what runs, how far, the time left.
 
-The workers send their training parts' progress (``somarm.run.progress.report_to``); this process
-shows it in one status line on stderr:
+``somarm reproduce --jobs N`` (its experiments, whose workers send their training parts' progress
+through ``somarm.run.progress.report_to``) and ``--engine ray`` (``somarm.cluster``: experiments, or
+a comparison's learner-seed units) show it in one status line on stderr:
 
     [######......] 3/9 done, 2 running: more_inputs ~41% (fig24 1200/4000), beyond ~12% | 4:05, ~6 min left
 
@@ -10,27 +11,26 @@ dm_control: it fits the line to the terminal's width, limits the redraws and pri
 the bar without breaking it). Into a file or a pipe (a CI log) it writes plain lines instead: the
 events (an experiment started or finished) as they happen and the status line once a minute.
 
-An experiment's fraction and the time left are estimates, marked with ``~``: an experiment does not
-know its own length beforehand, so each has an expected duration, the one measured on a 2-core
-machine (``durations.json``, at one seed; times the number of seeds here). Scaled by how this
-machine has kept to them so far (the finished experiments' measured over expected seconds, or a
-running one's that is already past its expected time), they give the running experiments' fractions
-and, placed on the free workers in order, the time left. What the training part under way reports
-(its steps done of its total) is exact.
+A piece of work's fraction and the time left are estimates, marked with ``~``: a piece does not
+know its own length beforehand, so each has an expected duration (for the reproduction's
+experiments, the one measured on a 2-core machine: ``somarm/reproduce/durations.json``; for a
+cluster's units, the mean of the finished units of the same kind). Scaled by how this run has kept
+to them so far (the finished pieces' measured over expected seconds, or a running one's that is
+already past its expected time), they give the running pieces' fractions and, placed on the free
+workers in order, the time left. What the training part under way reports (its steps done of its
+total) is exact.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import shutil
 import sys
 import time
-from pathlib import Path
 from typing import TextIO
 
-__all__ = ["Status", "expected_durations", "time_left"]
+__all__ = ["Status", "time_left"]
 
 #: Away from a terminal: one status line per this many seconds.
 LOG_PERIOD_S = 60.0
@@ -38,13 +38,6 @@ LOG_PERIOD_S = 60.0
 DRAW_PERIOD_S = 0.5
 #: The longest training part label shown (longer ones are cut).
 _LABEL = 16
-
-
-def expected_durations(quick: bool, n_seeds: int) -> dict[str, float]:
-    """Each experiment's expected wall time in seconds on 2 cores under ``--jobs 2`` (``durations.json``),
-    times ``n_seeds``; experiments without a measure are left out."""
-    measured = json.loads((Path(__file__).with_name("durations.json")).read_text())
-    return {name: seconds * n_seeds for name, seconds in measured["quick" if quick else "full"].items()}
 
 
 def time_left(remaining_running: list[float], waiting: list[float], workers: int) -> float:
@@ -73,12 +66,13 @@ def _about(seconds: float) -> str:
 
 
 class Status:
-    """The status of experiments run in worker processes, shown on ``stream`` (stderr by default).
+    """The status of pieces of work (experiments, units) run elsewhere, shown on ``stream`` (stderr by default).
 
     Args:
-      names: the experiments, in the order they will start.
-      workers: the worker processes.
-      expected: expected seconds by experiment (``expected_durations``); one left out makes the time left unknown.
+      names: the pieces, in the order they will start.
+      workers: how many run at once.
+      expected: expected seconds by piece; one left out makes the time left unknown (``expected`` may
+        be updated as the run learns more).
       enabled: draw the status (bar or periodic lines); the events are written either way.
     """
 
@@ -92,6 +86,7 @@ class Status:
         self.start = time.monotonic()
         self.began: dict[str, float] = {}  # running experiment -> when it started
         self.took: dict[str, float] = {}  # finished experiment -> its seconds
+        self.lost: list[str] = []  # the pieces that failed
         self.part: dict[str, tuple[str, int, int]] = {}  # running experiment -> (label, step, total) of its training
         self.terminal = _is_terminal(self.stream)
         self._bar = None
@@ -104,19 +99,26 @@ class Status:
                              leave=False, mininterval=0.0)
 
     # Events -----------------------------------------------------------------------------------
-    def started(self, name: str, pid: int) -> None:
-        """Experiment ``name`` started in process ``pid``."""
+    def started(self, name: str, where: str) -> None:
+        """Piece ``name`` started ``where`` (``"in process 123"``, ``"on the cluster"``)."""
         self.began[name] = time.monotonic()
-        self.say(f"{name}: started in process {pid}")
+        self.say(f"{name}: started {where}")
 
     def progress(self, name: str, label: str, step: int, total: int) -> None:
         """A running experiment's training part ``label`` is at ``step`` of ``total``."""
         self.part[name] = (label, step, total)
 
-    def finished(self, name: str) -> None:
-        """Experiment ``name`` ended (its own line is written by the caller, through ``say``)."""
+    def finished(self, name: str) -> float:
+        """Piece ``name`` ended (its own line is written by the caller, through ``say``); its seconds."""
         self.took[name] = time.monotonic() - self.began.pop(name, self.start)
         self.part.pop(name, None)
+        return self.took[name]
+
+    def failed(self, name: str) -> None:
+        """Piece ``name`` failed (the caller says why, through ``say``)."""
+        self.began.pop(name, None)
+        self.part.pop(name, None)
+        self.lost.append(name)
 
     def say(self, line: str) -> None:
         """Write an event line (above the bar on a terminal)."""
@@ -159,7 +161,7 @@ class Status:
 
     def seconds_left(self) -> float | None:
         """Estimated seconds until every experiment has ended; None when one has no expected duration."""
-        pending = [n for n in self.names if n not in self.took]
+        pending = [n for n in self.names if n not in self.took and n not in self.lost]
         if any(n not in self.expected for n in pending):
             return None
         now, pace = time.monotonic(), self.pace()
@@ -180,13 +182,14 @@ class Status:
                 text += f" ({label + ' ' if label else ''}{step}/{total})"
             running.append(text)
         left = self.seconds_left()
-        if len(self.took) == len(self.names):
+        if len(self.took) + len(self.lost) == len(self.names):
             left_text = "all done"
         elif left is None:
             left_text = "time left unknown (no measured duration)"
         else:
             left_text = f"{_about(left)} left"
         return (f"{len(self.took)}/{len(self.names)} done, {len(self.began)} running"
+                + (f", {len(self.lost)} failed" if self.lost else "")
                 + (": " + ", ".join(running) if running else "")
                 + f" | {_clock(time.monotonic() - self.start)}, {left_text}")
 
@@ -201,10 +204,11 @@ class Status:
     def done_share(self) -> float:
         """The estimated share of the whole run done, by expected seconds (by experiments without them)."""
         if any(n not in self.expected for n in self.names):
-            return len(self.took) / max(1, len(self.names))
+            return (len(self.took) + len(self.lost)) / max(1, len(self.names))
         fractions = self.fractions()
         total = sum(self.expected[n] for n in self.names)
-        done = sum(self.expected[n] for n in self.took) + sum(self.expected[n] * fractions[n] for n in self.began)
+        done = (sum(self.expected[n] for n in [*self.took, *self.lost])
+                + sum(self.expected[n] * fractions[n] for n in self.began))
         return done / max(1e-9, total)
 
     def draw(self, *, force: bool = False) -> None:

@@ -13,8 +13,9 @@ import sys
 import termios
 import time
 
-from somarm.reproduce import status as status_module
-from somarm.reproduce.status import Status, expected_durations, time_left
+from somarm import status as status_module
+from somarm.reproduce.parallel import expected_durations
+from somarm.status import Status, time_left
 
 _ENV = {**os.environ, "MUJOCO_GL": "disable"}
 
@@ -40,15 +41,15 @@ def test_the_fractions_and_time_left_follow_the_pace_the_finished_experiments_se
     monkeypatch.setattr(status_module.time, "monotonic", clock)
     log = io.StringIO()
     show = Status(["a", "b", "c"], workers=2, expected={"a": 10.0, "b": 20.0, "c": 10.0}, stream=log)
-    show.started("a", 11)
-    show.started("b", 12)
+    show.started("a", "in process 11")
+    show.started("b", "in process 12")
     clock.now += 5
     assert show.fractions() == {"a": 0.5, "b": 0.25} and show.seconds_left() == 15.0  # b: 15 s, c after a: 5 + 10
     clock.now += 15  # a took twice its expected time: everything is expected to take twice as long
     show.finished("a")
     assert show.pace() == 2.0
     assert show.fractions() == {"b": 0.5}
-    show.started("c", 11)
+    show.started("c", "in process 11")
     assert show.seconds_left() == 20.0  # b: 40 - 20, c: 20
     clock.now += 100  # past every estimate: a fraction stays below 1 while it runs
     assert max(show.fractions().values()) == 0.99
@@ -59,7 +60,7 @@ def test_away_from_a_terminal_the_events_are_lines_and_the_status_a_line_a_minut
     monkeypatch.setattr(status_module.time, "monotonic", clock)
     log = io.StringIO()
     show = Status(["a", "b"], workers=2, expected={"a": 60.0}, stream=log)
-    show.started("a", 11)
+    show.started("a", "in process 11")
     show.progress("a", "Fig. 7", 300, 1000)
     for _ in range(10):  # many redraws within the minute: none is written
         clock.now += 5
