@@ -121,28 +121,58 @@ class LoopbackBridge(ZMQWebSocketBridge):
         ])
 
     def handle_zmq(self, frames):
-        command = frames[0]
-        if command == b"batch":
-            self._apply_batch(frames[1:])
-        elif command == b"n_clients":
-            self.zmq_stream.send(str(len(self.websocket_pool)).encode())
-        elif command == b"wait":
-            self._reply_when_connected()
-        elif command == TEXT_COMMAND.encode() and len(frames) == 3:  # meshcat's own handler knows no text
-            self.apply_command(TEXT_COMMAND, "", frames[2])
-            self.zmq_stream.send(b"ok")
-        else:
-            super().handle_zmq(frames)
-
-    def _apply_batch(self, frames):
-        """Apply (type, path, data) triples as one request: one round trip per frame, not per command."""
-        if len(frames) % 3:
-            self.zmq_stream.send(b"error: a batch is (type, path, data) triples")
+        """Answer one request on the command socket. A malformed one (bytes that are no command, a
+        wrong number of frames, data that is not msgpack) is answered ``error: ...`` and dropped, with
+        one line in the log: the socket must answer every request to take the next one."""
+        try:
+            reply = self._answer(frames)
+        except Exception as exc:
+            reply = f"error: {type(exc).__name__}: {exc}".splitlines()[0].encode()
+        if reply is None:  # answered later (``wait``)
             return
+        if reply.startswith(b"error: "):
+            print(f"bridge: request dropped ({len(frames)} frame(s), {sum(map(len, frames))} bytes): "
+                  f"{reply[7:].decode(errors='replace')}", file=sys.stderr, flush=True)
+        self.zmq_stream.send(reply)
+
+    def _answer(self, frames) -> bytes | None:
+        """The reply to a request (None: ``wait``, answered once a browser is connected)."""
+        command = frames[0].decode("ascii")
+        if command == "batch":
+            return self._apply_batch(frames[1:])
+        if command == "n_clients":
+            return str(len(self.websocket_pool)).encode()
+        if command == "wait":
+            self._reply_when_connected()
+            return None
+        if command == "url":
+            return self.web_url.encode()
+        if command in (*MESHCAT_COMMANDS, TEXT_COMMAND):
+            if len(frames) != 3:
+                return f"error: {command} takes 3 frames (command, path, data), got {len(frames)}".encode()
+            return self._apply_batch(frames)
+        return f"error: unknown command {command[:40]!r}; commands: batch, n_clients, wait, url, " \
+               f"{', '.join(MESHCAT_COMMANDS)}, {TEXT_COMMAND}".encode()
+
+    def _apply_batch(self, frames) -> bytes:
+        """Apply (type, path, data) triples as one request: one round trip per frame, not per command.
+        Every command is checked (a known one, its data a msgpack map by its first byte; the overlay's
+        read whole) before any is applied."""
+        if len(frames) % 3:
+            return b"error: a batch is (type, path, data) triples"
+        commands = []
         for k in range(0, len(frames), 3):
-            kind, path, data = frames[k : k + 3]
-            self.apply_command(kind.decode(), path.decode(), data)
-        self.zmq_stream.send(b"ok")
+            kind, path, data = frames[k].decode("ascii"), frames[k + 1].decode("utf-8"), frames[k + 2]
+            if kind not in MESHCAT_COMMANDS and kind != TEXT_COMMAND:
+                return f"error: unknown command {kind[:40]!r} in a batch".encode()
+            if not data or not (0x80 <= data[0] <= 0x8F or data[0] in (0xDE, 0xDF)):  # a msgpack map's first byte
+                return f"error: the data of {kind} is a msgpack map, got {bytes(data[:8])!r}".encode()
+            if kind == TEXT_COMMAND and not isinstance(umsgpack.unpackb(data), dict):
+                return f"error: the data of {TEXT_COMMAND} is not a msgpack map".encode()
+            commands.append((kind, path, data))
+        for kind, path, data in commands:
+            self.apply_command(kind, path, data)
+        return b"ok"
 
     def apply_command(self, kind: str, path: str, data: bytes) -> None:
         """Forward one packed command to every browser and remember it for later ones."""

@@ -31,6 +31,8 @@ from somarm.viewer.client import ViewerUnavailableWarning
 __all__ = ["LiveView", "greedy_policy", "pack_snapshot"]
 
 _HEALTH_CHECK_S = 1.0
+#: The warnings registry of ``LiveView``'s one-line warning (each said once per process, as ``warnings.warn``'s).
+_WARNED: dict = {}
 #: The running mean reward is over the last this many sampled steps of the shown trial.
 _REWARD_WINDOW = 90
 #: A path's frames play at 50 a second, every second 0.01 s timestep (motion.py).
@@ -311,8 +313,10 @@ class LiveView:
     def _switch_off(self, reason: str) -> None:
         self.alive = False
         end_line()  # the warning gets a line of its own, not the end of the progress bar's
-        warnings.warn(f"the meshcat viewer's server {reason}; viewing is off, training carries on",
-                      ViewerUnavailableWarning, stacklevel=3)
+        # One line: given as from "somarm", the warning shows no line of source code beneath it.
+        warnings.warn_explicit(f"the meshcat viewer's server {reason}; viewing is off, training carries on",
+                               ViewerUnavailableWarning, filename="somarm", lineno=0, module=__name__,
+                               registry=_WARNED)
 
     def close(self) -> None:
         """Stop the server and close the socket. Idempotent."""
