@@ -198,6 +198,7 @@ def _cmd_evaluate(args) -> int:
 
 
 def _cmd_reproduce(args) -> int:
+    from somarm import cluster
     from somarm.reproduce import runner
     from somarm.run.claim import claim
     from somarm.run.stopping import sigterm_as_interrupt
@@ -205,6 +206,7 @@ def _cmd_reproduce(args) -> int:
     if args.jobs is None:
         args.jobs = runner.default_jobs()
     # Before --out is claimed: a run that cannot fit must leave no folder and no report behind.
+    cluster.check_engine(args.engine, args.ray_address)
     runner.check_request(args.only, quick=args.quick, seed=args.seed, seeds=args.seeds, jobs=args.jobs,
                          backend=args.backend)
     out = _out_folder(args.out, "reproduce")
@@ -215,7 +217,7 @@ def _cmd_reproduce(args) -> int:
     try:
         status = runner.reproduce(owner.path, quick=args.quick, only=args.only, progress=not args.no_progress,
                                   seeds=args.seeds, seed=args.seed, backend=args.backend, jobs=args.jobs,
-                                  final_out=owner.folder)
+                                  final_out=owner.folder, engine=args.engine, address=args.ray_address)
         owner.finish(status == 0)  # a finished report; an interrupted one only where there was none
         if status != 0 and owner.replacing:
             print(f"the earlier report in {out} is kept (an interrupted run does not replace it)", file=sys.stderr)
@@ -233,7 +235,7 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_compare(args) -> int:
-    from somarm import tasks
+    from somarm import cluster, tasks
     from somarm.peers import compare
     from somarm.run.claim import claim
     from somarm.run.config import parse_assignments
@@ -251,11 +253,13 @@ def _cmd_compare(args) -> int:
         task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
     )
     compare.check(config)
+    cluster.check_engine(args.engine, args.ray_address)
     out = _out_folder(args.out, f"compare/{config.task.replace(':', '-')}")
     owner = claim(out, force=args.force, resume=args.resume, what="a comparison")
     sigterm_as_interrupt()
     try:
-        compare.compare(config, owner.path, progress=not args.no_progress, resume=args.resume)
+        compare.compare(config, owner.path, progress=not args.no_progress, resume=args.resume, engine=args.engine,
+                        address=args.ray_address)
         owner.commit()
     except BaseException:
         owner.finish(False)
@@ -274,6 +278,15 @@ def _cmd_sweep(args) -> int:
 
 def _cmd_forward(module: str, argv: list[str]) -> int:
     return int(importlib.import_module(module).main(argv) or 0)
+
+
+def _engine_options(parser: argparse.ArgumentParser, units: str) -> None:
+    """``--engine`` and ``--ray-address``, as ``compare`` and ``reproduce`` take them."""
+    parser.add_argument("--engine", default="local", choices=("local", "ray"),
+                        help=f"local (default: processes on this machine) or ray (a Ray cluster: {units})")
+    parser.add_argument("--ray-address", metavar="ADDRESS",
+                        help="the Ray cluster to join (HOST:PORT, as `ray start --head` prints), with --engine ray "
+                             "(default: start a local one on this machine)")
 
 
 def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
@@ -334,6 +347,8 @@ def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     reproduce.add_argument("--jobs", type=whole_number, default=None, metavar="N",
                            help="experiments run at once, each in its own process (default: the number of "
                                 "cores; 1: one after another in this process, with progress bars)")
+    _engine_options(reproduce, "every experiment a unit of one CPU; the comparisons' parts run here, their "
+                               "learner-seed units there")
     reproduce.set_defaults(func=_cmd_reproduce)
 
     comp = sub.add_parser("compare", help="somarm's learners beside SB3's TD3 and SAC on one task")
@@ -358,6 +373,7 @@ def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     comp.add_argument("--resume", action="store_true",
                       help="go on with the comparison in --out: seeds finished there with the same settings are kept")
     comp.add_argument("--no-progress", action="store_true", help="no progress lines")
+    _engine_options(comp, "every learner at every seed a unit of one CPU, its seed record written here")
     comp.set_defaults(func=_cmd_compare)
 
     bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer, adapters (pass --help after the name)")

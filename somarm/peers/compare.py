@@ -12,6 +12,7 @@ one thread (somarm's learners use one core too), and every setting is written in
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import sys
@@ -27,7 +28,7 @@ from somarm.io import atomic_write_json
 from somarm.run import evaluation
 
 __all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "ladder", "check", "compare", "peers_missing",
-           "peer_budget", "default_samples", "task_defaults"]
+           "peer_budget", "default_samples", "task_defaults", "run_unit", "engine_of_parts"]
 
 OURS = ("somq", "somq+", "motoric", "tabular")
 PEERS = ("td3", "sac")
@@ -368,14 +369,49 @@ def _earlier_seed(path: Path, fingerprint: dict, progress: bool):
     return found[1:]
 
 
-def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: bool = False) -> dict[str, Any]:
+#: The engine (and Ray address) of a comparison that names none: ``engine_of_parts`` sets it for
+#: the comparisons that the parts of ``somarm reproduce --engine ray`` make.
+_engine: tuple[str, str | None] = ("local", None)
+
+
+@contextlib.contextmanager
+def engine_of_parts(engine: str, address: str | None):
+    """Within it, every comparison made without an engine runs on ``engine`` (at ``address``)."""
+    global _engine
+    before, _engine = _engine, (engine, address)
+    try:
+        yield
+    finally:
+        _engine = before
+
+
+#: The learners whose compiled code or kernels this process has warmed up (``run_unit``).
+_WARMED: set[str] = set()
+
+
+def run_unit(config: CompareConfig, kind: str, seed: int, rungs: list[int], params: dict[str, Any]):
+    """One learner at one seed, in whatever process runs it (this one, or a Ray worker): its scores at
+    the rungs, its training seconds and its settings, ``(values, walls, settings)``. The first unit of
+    a learner in a process warms it up first, untimed (numba compiles SOM-Q's kernels, torch builds
+    its own); the scores do not depend on it."""
+    warm_up = kind not in _WARMED
+    _WARMED.add(kind)
+    runner = _run_peer if kind in PEERS else _run_ours
+    return runner(kind, config, seed, rungs, _Scorer(config, params), params, warm_up=warm_up)
+
+
+def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: bool = False,
+            engine: str | None = None, address: str | None = None) -> dict[str, Any]:
     """Train every learner on every seed, write ``out/compare.json`` and ``out/compare.png``.
 
-    ``compare.json`` is rewritten (atomically) after each learner, so an interruption keeps what
-    finished (``"complete": false``). Each learner's scores at each seed are also kept in
-    ``out/seeds/<learner>-<seed>.json`` with everything they depend on; with ``resume`` a seed whose
-    record there matches is read back instead of trained again (a long comparison goes on where it
-    stopped).
+    Each learner at each seed is a unit (``run_unit``); its scores are kept in
+    ``out/seeds/<learner>-<seed>.json`` with everything they depend on, written by this process as
+    the unit comes back, and ``compare.json`` is rewritten (atomically) with every learner whose
+    seeds are all in, so an interruption keeps what finished (``"complete": false``). With
+    ``resume`` a seed whose record there matches is read back instead of trained again (a long
+    comparison goes on where it stopped). ``engine="ray"`` runs the units on the Ray cluster at
+    ``address`` (None: a local one; ``somarm.cluster``); the scores and settings are the same as
+    here, unit for unit. ``engine=None``: "local", or what ``engine_of_parts`` set.
 
     Returns:
       The ``compare.json`` content: per learner ``samples`` (the ladder), ``error`` (rung x seed; for a
@@ -383,11 +419,16 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
       ``seconds_per_sample`` and ``settings``.
 
     Raises:
-      ValueError: as ``check``. KeyboardInterrupt: after writing what finished.
+      ValueError: as ``check``; an unknown engine or Ray missing; units that failed on the cluster
+        (after the others were kept). KeyboardInterrupt: after writing what finished.
     """
 
+    from somarm import cluster
     from somarm.peers.figure import compare_figure  # matplotlib loads only when a figure is drawn
 
+    if engine is None:
+        engine, address = _engine
+    cluster.check_engine(engine, address)
     learners = check(config)
     params = _params(config)
     score = _Scorer(config, params)
@@ -399,39 +440,74 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
     }
     result.update({"episodes": config.episodes} if score.episodic else {"observations": config.observations})
     (out / "seeds").mkdir(parents=True, exist_ok=True)
+    budgets = {kind: peer_budget(kind, config) if kind in PEERS else config.samples for kind in learners}
+    found: dict[tuple[str, int], tuple] = {}  # (kind, seed) -> (values, walls, settings)
+    todo: list[tuple[str, int, list[int], dict]] = []  # (kind, seed, rungs, fingerprint)
     for kind in learners:
-        samples = peer_budget(kind, config) if kind in PEERS else config.samples
-        rungs = ladder(samples)
-        runner = _run_peer if kind in PEERS else _run_ours
-        values, walls, settings = [], [], {}
-        warm = False  # the first seed trained in this process warms up (untimed)
+        rungs = ladder(budgets[kind])
         learner_settings = _learner_settings(kind, config)
-        for seed in range(config.seed, config.seed + config.seeds):
-            record = out / "seeds" / f"{kind}-{seed}.json"
+        for seed in result["seeds"]:
             fingerprint = _fingerprint(kind, learner_settings, config, seed, rungs, params, score)
-            earlier = _earlier_seed(record, fingerprint, progress) if resume else None
+            earlier = _earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress) if resume else None
             if earlier is None:
-                v, w, settings = runner(kind, config, seed, rungs, score, params, warm_up=not warm)
-                warm = True
-                atomic_write_json(record, {"fingerprint": fingerprint, "values": v, "walls": w, "settings": settings})
+                todo.append((kind, seed, rungs, fingerprint))
             else:
-                v, w, settings = earlier
-            values.append(v)
-            walls.append(w)
-            if progress:
-                again = "" if earlier is None else " (kept from the earlier run)"
-                print(f"{config.task}/{kind} seed {seed}: {samples} samples in {w[-1]:.1f} s, "
-                      f"greedy {score.metric} {v[-1]:.4g}{again}", file=sys.stderr, flush=True)
-        walls_array = np.array(walls)
-        result["learners"][kind] = {
-            "samples": rungs,
-            score.metric: np.array(values).T.tolist(),
-            "wall_seconds": walls_array.T.tolist(),
-            "seconds_per_sample": (walls_array[:, -1] / samples).tolist(),
-            "settings": settings,
-        }
+                found[kind, seed] = tuple(earlier)
+                _said(config, kind, seed, budgets[kind], score.metric, found[kind, seed], kept=True, progress=progress)
+
+    def keep(kind: str, seed: int, fingerprint: dict, unit_result) -> None:
+        """A unit's result: its seed record, its line, and compare.json with every learner now complete."""
+        v, w, settings = unit_result
+        atomic_write_json(out / "seeds" / f"{kind}-{seed}.json",
+                          {"fingerprint": fingerprint, "values": v, "walls": w, "settings": settings})
+        found[kind, seed] = (v, w, settings)
+        _said(config, kind, seed, budgets[kind], score.metric, found[kind, seed], kept=False, progress=progress)
+        _fill(result, found, learners, budgets, score.metric)
         atomic_write_json(out / "compare.json", result)
+
+    if engine == "ray":
+        units = [cluster.Unit(f"{kind} seed {seed}", run_unit, (config, kind, seed, rungs, params), kind=kind)
+                 for kind, seed, rungs, _ in todo]
+        fingerprints = {f"{kind} seed {seed}": (kind, seed, fingerprint) for kind, seed, _, fingerprint in todo}
+        failed = cluster.run_units(units, on_done=lambda unit, r: keep(*fingerprints[unit.name], r), address=address,
+                                   progress=progress)
+        if failed:
+            unit, why = failed[0]
+            raise ValueError(f"{len(failed)} of {len(units)} unit(s) failed on the cluster ({unit.name}: {why}); "
+                             f"the units that came back are kept in {out / 'seeds'}: rerun with --resume for the rest")
+    else:
+        for kind, seed, rungs, fingerprint in todo:
+            keep(kind, seed, fingerprint, run_unit(config, kind, seed, rungs, params))
+    _fill(result, found, learners, budgets, score.metric)
     result["complete"] = True
     atomic_write_json(out / "compare.json", result)
     compare_figure(result, out / "compare.png")
     return result
+
+
+def _said(config: CompareConfig, kind: str, seed: int, samples: int, metric: str, found: tuple, *, kept: bool,
+          progress: bool) -> None:
+    """A unit's line: its learner and seed, its samples, training seconds and last score."""
+    if progress:
+        values, walls, _ = found
+        again = " (kept from the earlier run)" if kept else ""
+        print(f"{config.task}/{kind} seed {seed}: {samples} samples in {walls[-1]:.1f} s, "
+              f"greedy {metric} {values[-1]:.4g}{again}", file=sys.stderr, flush=True)
+
+
+def _fill(result: dict[str, Any], found: dict[tuple[str, int], tuple], learners: list[str], budgets: dict[str, int],
+          metric: str) -> None:
+    """``result["learners"]``: every learner whose seeds are all in, in the order asked."""
+    result["learners"] = {}
+    for kind in learners:
+        if not all((kind, seed) in found for seed in result["seeds"]):
+            continue
+        per_seed = [found[kind, seed] for seed in result["seeds"]]
+        walls = np.array([w for _, w, _ in per_seed])
+        result["learners"][kind] = {
+            "samples": ladder(budgets[kind]),
+            metric: np.array([v for v, _, _ in per_seed]).T.tolist(),
+            "wall_seconds": walls.T.tolist(),
+            "seconds_per_sample": (walls[:, -1] / budgets[kind]).tolist(),
+            "settings": per_seed[-1][2],
+        }

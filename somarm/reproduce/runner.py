@@ -98,6 +98,7 @@ def check_request(only: list[str] | None, *, quick: bool, seed: int, seeds: int,
 def reproduce(
     out: Path, *, quick: bool = False, only: list[str] | None = None, seed: int = 0, progress: bool = True,
     seeds: int = 1, backend: str = "mujoco", jobs: int = 1, final_out: Path | None = None,
+    engine: str = "local", address: str | None = None,
 ) -> int:
     """Run the chosen experiments and write ``out/REPORT.md``, ``out/claims.json`` and the figures.
 
@@ -110,6 +111,9 @@ def reproduce(
         experiment (the command line's default is ``default_jobs``, the number of cores).
       final_out: the folder the report ends up in when the caller moves it there from ``out`` (a
         forced run writes into a staging folder first); the path printed at the end. Default ``out``.
+      engine: "local" (``jobs`` decides), or "ray": every experiment a unit on the Ray cluster at
+        ``address`` (None: a local one), the comparisons' parts here with their learner-seed units
+        there (``somarm.reproduce.remote``); the numbers equal a local run's.
 
     Returns:
       0 when every experiment ran (whatever the verdicts), 130 when interrupted (the report then
@@ -135,7 +139,10 @@ def reproduce(
 
     experiments = {name: {**EXPERIMENTS, **OPTIONAL}[name] for name in names}
     try:
-        if min(jobs, len(experiments)) > 1:  # one experiment alone runs here, with its progress bars
+        if engine == "ray":
+            status = _run_on_ray(experiments, out, quick=quick, seeds=all_seeds, progress=progress, backend=backend,
+                                 address=address, finished=finished)
+        elif min(jobs, len(experiments)) > 1:  # one experiment alone runs here, with its progress bars
             from somarm.reproduce import parallel
 
             status = parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
@@ -158,6 +165,30 @@ def _print_summary(sections: list[Section], report: Path, *, seeds: int, total: 
     claims = sum(len(s.claims) for s in sections)
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
     print(f"report: {report} ({held} of {claims} claims hold{over}; {total:.1f} s)")
+
+
+def _run_on_ray(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quick: bool,
+                seeds: tuple[int, ...], progress: bool, backend: str, address: str | None,
+                finished: Callable[[str, Section], None]) -> int:
+    """``--engine ray``: the experiments as units on the cluster, then the comparisons' parts here with
+    their units there; 130 when interrupted."""
+    from somarm import cluster
+    from somarm.peers.compare import engine_of_parts
+    from somarm.reproduce import remote
+
+    comparisons = {n: e for n, e in experiments.items() if n in GYMNASIUM_PARTS or n == "peers"}
+    units = {n: e for n, e in experiments.items() if n not in comparisons}
+    started = cluster.join(address)  # one cluster for both kinds of part
+    try:
+        status = remote.run(units, out, quick=quick, seeds=seeds, backend=backend, address=address,
+                            finished=finished, progress=progress) if units else 0
+        if status or not comparisons:
+            return status
+        with engine_of_parts("ray", address):
+            return _run_in_turn(comparisons, out, quick=quick, seeds=seeds, progress=progress, backend=backend,
+                                finished=finished)
+    finally:
+        cluster.leave(started)
 
 
 def _run_in_turn(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quick: bool,
