@@ -210,7 +210,10 @@ class SOMQ(MapLearner):
         n_s, n_a = int(np.prod(config.input_shape)), int(np.prod(config.action_shape))
         n_floats = grid_floats(config.input_shape) + grid_floats(config.action_shape)
         if config.grouped:  # G maps of n_s units over the widest group's dimensions, G tables
-            table = groups.group_table(groups.parse_groups(config.input_groups, obs_dim))
+            # obs_dim may be a lower bound (a run's check before its task is built): index lists then
+            # count as many dimensions as they name.
+            named = [int(v) for v in config.input_groups.replace(";", ",").split(",") if v.strip().isdigit()]
+            table = groups.group_table(groups.parse_groups(config.input_groups, max([obs_dim, *(v + 1 for v in named)])))
             n_maps, width = table.shape
             n_floats += n_trials * (n_maps * n_s * (width + n_a + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "

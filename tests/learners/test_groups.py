@@ -189,3 +189,14 @@ def test_a_growing_trial_alone_equals_the_same_trial_in_a_batch(grow_every):
     _drive(alone, 60)
     for name in ("input_weights", "action_weights", "q", "_shapes"):
         np.testing.assert_array_equal(getattr(batch, name)[1], getattr(alone, name)[0])
+
+
+def test_the_memory_check_before_a_task_is_built_takes_index_lists_beyond_its_lower_bound():
+    # A run checks memory with obs_dim=1 before its task exists; index lists name more dimensions.
+    import dataclasses
+
+    from somarm.learners import presets, somq
+
+    config = dataclasses.replace(presets.get("invertedpendulum"), input_groups="1,3;0,2")
+    what, n_bytes = somq.SOMQ.memory_needed(config, n_trials=2, obs_dim=1, action_dim=1)
+    assert "2 input map(s)" in what and n_bytes > 0
