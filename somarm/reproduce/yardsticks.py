@@ -6,7 +6,9 @@ coarse the way SOM-Q is coarse: round its torque to the preset's grid (the actio
 from the centre of a grid cell instead of the observation (the state side, as a nearest-unit lookup
 does), or from the input units SOM-Q itself learned: the nearest one, as the paper's winner response
 sees the state, or a blend over the nearest few, as the interpolated response does; or from maps of
-400 to 10,000 units learned on the controller's own states, the best case for a map of that size.
+400 to 10,000 units learned on the controller's own states, the best case for a map of that size; or,
+for Reacher-v5, as SOM-Q itself learns to hold the controller through each input representation
+(``REPRESENTATIONS``: one map, maps over pairs of dimensions whose Q-values add, k nearest units, growing maps).
 Every number is a mean undiscounted return over fresh episodes of the environment itself.
 
 The controllers are this project's:
@@ -23,8 +25,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "ENVIRONMENTS", "mean_return", "round_to", "cell_centre",
-           "learned_map", "controller_map", "through_map", "inverted_pendulum", "reacher", "measure", "table"]
+__all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "ENVIRONMENTS", "REPRESENTATIONS", "mean_return", "round_to",
+           "cell_centre", "learned_map", "controller_map", "controller_states", "through_map", "through_representation", "inverted_pendulum", "reacher", "measure", "table"]
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
@@ -146,6 +148,82 @@ def through_map(policy: Policy, task, units: np.ndarray, n_basis: int = 1) -> Po
     return seen
 
 
+def controller_states(env_id: str, policy: Policy, task, steps: int, noise: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The scaled states ``policy`` visits with Gaussian torque noise of sd ``noise`` (``steps`` of them,
+    episodes reset from a generator seeded with ``seed``) and the policy's own torque at each, clipped
+    to the action box: ``(steps, obs_dim)``, ``(steps, action_dim)``."""
+    import gymnasium
+
+    rng = np.random.default_rng(seed)
+    env = gymnasium.make(env_id)
+    low, high = env.action_space.low, env.action_space.high
+    states, torques = [], []
+    try:
+        obs, _ = env.reset(seed=int(rng.integers(2**31)))
+        while len(states) < steps:
+            action = np.clip(np.asarray(policy(obs), dtype=np.float64), low, high)
+            states.append(task.scale(obs))
+            torques.append(action)
+            obs, _, terminated, truncated, _ = env.step(np.clip(action + noise * rng.standard_normal(action.shape),
+                                                               low, high))
+            if terminated or truncated:
+                obs, _, = env.reset(seed=int(rng.integers(2**31)))
+    finally:
+        env.close()
+    return np.array(states), np.array(torques)
+
+
+def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray, task, changes: dict,
+                           seed: int) -> Policy:
+    """A controller as a SOM-Q learner with the benchmark preset changed by ``changes`` (an input
+    representation: ``input_groups``, ``k_nearest``, ``grow_every``, ``input_shape``, ``response``) can hold
+    it, learned on the controller's own ``states`` and ``torques`` (``controller_states``): each step one
+    action unit is tried at random and rewarded ``-|a - torque|^2`` (gamma 0), so the greedy unit is the
+    grid torque nearest the controller's as that representation sees the state (Q starts at -1, below
+    what a tried torque earns, so a pair never tried is never the greedy one). Returns the learner's
+    greedy policy over raw observations (``task.scale``)."""
+    from somarm.learners import make, presets
+    from somarm.learners.schedules import Constant
+    from somarm.tasks import gym_envs
+
+    config = presets.get(gym_envs.BENCHMARKS[env_id][0]).with_changes(
+        {"gamma": 0.0, "p": 1.0, "p.decay": Constant(), "p.floor": 0.0, "epsilon": 0.0, "q_init": -1.0, **changes})
+    facts = gym_envs.describe(env_id)
+    learner = make("somq", config, observation_low=np.zeros(states.shape[1]), observation_high=np.ones(states.shape[1]),
+                   action_low=facts["action_low"], action_high=facts["action_high"], seed=seed)
+    for state, torque in zip(states, torques, strict=True):
+        action = learner.act(state[None])
+        learner.learn(-((action - torque) ** 2).sum(axis=1))
+    return lambda obs: learner.predict(task.scale(obs)[None])[0]
+
+
+#: The input representations the Reacher-v5 yardsticks learn the PD law through (``somarm.learners.groups``).
+REPRESENTATIONS = (
+    ("one 20x20 map (the paper's)", {"input_groups": "all", "input_shape": (20, 20)}),
+    ("one 20x20 map, its 3 nearest units", {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 3}),
+    ("45 maps of 10x10, one per pair of dimensions", {"input_groups": "pairs", "input_shape": (10, 10),
+                                                      "k_nearest": 1}),
+    ("45 pair maps of 10x10, their 3 nearest units", {"input_groups": "pairs", "input_shape": (10, 10),
+                                                      "k_nearest": 3}),
+    ("45 pair maps growing to 10x10 (a row or column every 1,000 steps), their 3 nearest units",
+     {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "grow_every": 1000}),
+)
+
+
+def _representation_rows(env_id: str, policy: Policy, scaling, map_steps: int | None,
+                         seed: int) -> list[tuple[str, Policy]]:
+    """``policy`` learned through each of ``REPRESENTATIONS`` on its own states (``map_steps`` of them,
+    None: ``CONTROLLER_MAP_STEPS``, 0: no rows), greedy with the winning action unit."""
+    if map_steps == 0:
+        return []
+    steps, noise = CONTROLLER_MAP_STEPS if map_steps is None else map_steps, CONTROLLER_MAP_NOISE[env_id]
+    states, torques = controller_states(env_id, policy, scaling, steps, noise, seed)
+    where = f"learned on the controller's own states ({steps:,} steps, torque noise sd {noise:g})"
+    return [(f"PD law as SOM-Q holds it through {label}, {where}",
+             through_representation(env_id, states, torques, scaling, {**changes, "response": "winner"}, seed))
+            for label, changes in REPRESENTATIONS]
+
+
 def _map_rows(env_id: str, policy: Policy, map_steps: int | None, seed: int,
               roundings: tuple[tuple[str, np.ndarray], ...] = ()) -> list[tuple[str, Policy]]:
     """The policy seen through the preset's learned input map (after ``map_steps`` steps, None: the
@@ -158,9 +236,9 @@ def _map_rows(env_id: str, policy: Policy, map_steps: int | None, seed: int,
 
     preset, steps = gym_envs.BENCHMARKS[env_id]
     map_steps = steps if map_steps is None else map_steps
-    if map_steps <= 0:
-        return []
     config = presets.get(preset)
+    if map_steps <= 0 or config.grouped:  # several maps: no one unit to see the state through
+        return []
     task, units = learned_map(env_id, map_steps, seed)
     shape = "x".join(str(n) for n in config.input_shape)
     n_basis = n_basis_for(config.input_shape)
@@ -270,6 +348,7 @@ def reacher(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[s
     if map_steps != 0:  # the task's own scaling, estimated from random actions (an infinite Box)
         bounds = gym_envs.estimate_bounds(gym_envs.GymParams("Reacher-v5"), seed)
         rows += _controller_map_rows("Reacher-v5", _reacher_pd, gym_envs.BoxScaling(*bounds), map_steps, seed)
+        rows += _representation_rows("Reacher-v5", _reacher_pd, gym_envs.BoxScaling(*bounds), map_steps, seed)
     return [(label, mean_return("Reacher-v5", policy, episodes, seed)) for label, policy in rows]
 
 
