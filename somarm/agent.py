@@ -21,8 +21,15 @@ Where it differs from SB3, and why:
   learning, so ``deterministic=False`` is refused rather than answered with something else.
 - Observations are the environment's own; the model scales them as its task does
   (``somarm.tasks.gym_envs``). Actions come back in the action Box's dtype.
-- Given an environment object, the model makes its own copies from its id and keywords (its time
-  limit kept, its ``render_mode`` dropped); wrappers added after ``gymnasium.make`` are refused.
+- Given an environment object, the model trains in it as given, wrappers and all (Monitor,
+  TimeLimit, RecordEpisodeStatistics, observation wrappers that keep the observation's shape); more
+  trials step copies of it. Its id and keywords go to ``config.json`` (time limit kept,
+  ``render_mode`` dropped), so ``somarm evaluate`` remakes it without the wrappers; ``load(path,
+  env=env)`` trains in a wrapped one again. Wrappers that change the action Box or the observation's
+  shape are refused (the action map and the run folder hold those).
+- ``learn`` takes SB3's callbacks (``somarm.callbacks``); ``num_timesteps`` counts the steps of one
+  trial since ``learn`` last reset it, while the learner's schedules follow its own step ``learner.t``.
+  A model saved by a callback in the middle of ``learn`` is written without the greedy evaluation.
 - A loaded model learns on from the saved step: its episodes start from streams of their own for that
   step, and its curves (read back from the folder) go on where they stopped.
 """
@@ -41,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from somarm import run
+from somarm.agent_env import bounds_of, task_name, task_on
 from somarm.protocols import BatchedTask, Learner
 from somarm.run import RunConfig
 from somarm.run.loop import EpisodeLog, Episodes, loop
@@ -52,36 +60,25 @@ class LearningInterrupted(UserWarning):
     """``SOMQ.learn`` was stopped by Ctrl-C or SIGTERM before it took every step asked for."""
 
 
-def _task_name(env: Any) -> tuple[str, dict[str, Any]]:
-    """The task name and Gymnasium keywords of ``env``: an id, ``gym:ID``, a task name or an environment."""
-    from somarm import tasks
+class _Tail:
+    """The training loop's ``on_step`` hook of ``learn``: the rewards since the last whole block (so a
+    learn stopped mid-block keeps a curve of every step), then the callbacks' hook if there is one."""
 
-    if isinstance(env, str):
-        if env.startswith("gym:") or env in tasks.names():
-            return env, {}
-        return "gym:" + env, {}
-    spec = getattr(env, "spec", None)
-    if spec is not None and getattr(spec, "id", None):
-        wrappers = [w.name for w in getattr(spec, "additional_wrappers", ()) or ()]
-        if wrappers:
-            raise ValueError(f"SOMQ makes its own copies of {spec.id} from its id and keywords, so the wrappers "
-                             f"added after gymnasium.make ({', '.join(wrappers)}) would be lost: give an "
-                             "environment without them, or its id")
-        # The copies render nothing (`somarm view` shows a model), and keep a time limit set at make.
-        kwargs = {k: v for k, v in dict(spec.kwargs or {}).items() if k != "render_mode"}
-        from gymnasium import error
-        from gymnasium import spec as registered
+    def __init__(self, block: int, n_trials: int, then: Any = None) -> None:
+        self.block, self.then = block, then
+        self.total, self.total_sq = np.zeros(n_trials), np.zeros(n_trials)
 
-        try:
-            default_limit = registered(spec.id).max_episode_steps
-        except error.Error:
-            raise ValueError(f"{spec.id} is not a registered Gymnasium environment; SOMQ makes its copies "
-                             "from the registry (gymnasium.register it, or give a registered id)") from None
-        if spec.max_episode_steps != default_limit:
-            kwargs["max_episode_steps"] = spec.max_episode_steps
-        return "gym:" + spec.id, kwargs
-    raise ValueError(f"env must be a Gymnasium id (such as 'Pendulum-v1'), a somarm task name or a registered "
-                     f"Gymnasium environment, got {type(env).__name__}")
+    def __call__(self, step: int, observations: np.ndarray, actions: np.ndarray, rewards: np.ndarray) -> None:
+        if (step - 1) % self.block == 0:
+            self.total[:], self.total_sq[:] = 0.0, 0.0
+        self.total += rewards
+        self.total_sq += rewards * rewards
+        if self.then is not None:
+            self.then(step, observations, actions, rewards)
+
+
+#: What a model keeps of its past when ``set_env`` gives it another environment.
+_HISTORY = ("_blocks", "_squares", "_episodes", "_wall_time", "_origin", "_cannot_learn")
 
 
 class SOMQ:
@@ -89,8 +86,7 @@ class SOMQ:
 
     Args:
       env: a Gymnasium id (``"Pendulum-v1"``), ``"gym:ID"``, a somarm task name (``"reach2"``) or a
-        Gymnasium environment made with ``gymnasium.make`` (its id and keywords are used: the model
-        makes its own copies).
+        Gymnasium environment made with ``gymnasium.make``, wrapped or not (trained in as given).
       seed: the run's seed (every random number derives from it).
       n_trials: independent learners trained side by side.
       preset: a parameter table (``somarm presets``); default the task's.
@@ -99,19 +95,25 @@ class SOMQ:
       **settings: learner settings changed from the preset, typed (``epsilon=0.2``, ``gamma=0.99``).
 
     Raises:
-      ValueError: an unknown environment or a bad setting (one line).
+      ValueError: an unknown environment, wrappers that change the action Box or the observation's
+        shape, or a bad setting (one line); ``MissingExtra`` (an ``ImportError`` as well) where
+        Gymnasium is not installed.
     """
 
     def __init__(self, env: Any, *, seed: int = 0, n_trials: int = 1, preset: str | None = None,
                  env_kwargs: dict[str, Any] | None = None, learner: str = "somq", **settings: Any) -> None:
-        task, kwargs = _task_name(env)
+        task, kwargs, given = task_name(env)
+        params = {**kwargs, **(env_kwargs or {})}
+        if given is not None and "observation_low" not in params:
+            params.update(bounds_of(given, task, params, seed))
         config = RunConfig(task=task, learner=learner, preset=preset, overrides=dict(settings),
-                           task_params={**kwargs, **(env_kwargs or {})}, n_trials=n_trials, seed=seed)
-        self._start(config.resolved())
+                           task_params=params, n_trials=n_trials, seed=seed)
+        self._start(config.resolved(), env=given)
 
-    def _start(self, config: RunConfig, learner: Learner | None = None) -> None:
+    def _start(self, config: RunConfig, learner: Learner | None = None, env: Any = None) -> None:
         self.config = config
-        self.task: BatchedTask = run.make_task(config)
+        self.env = env  #: the environment object given, trained in as it is (None: copies made from the id)
+        self.task: BatchedTask = run.make_task(config) if env is None else task_on(config, env)
         self.learner: Learner = learner if learner is not None else run.make_learner(config, self.task)
         self.task.continue_at(self.learner.t)  # a loaded model meets new starts, not its first ones again
         self._blocks: list[tuple[int, np.ndarray]] = []
@@ -121,14 +123,29 @@ class SOMQ:
         self._wall_time = 0.0
         self._cannot_learn: str | None = None
         self.interrupted = False  #: the last ``learn`` was stopped by Ctrl-C or SIGTERM before its end
+        self._origin = 0  # the learner's step at which num_timesteps last started from 0
+        self._learning = False
+        self._vec_env = None
+        self._logger = None
 
     @property
     def num_timesteps(self) -> int:
-        """Steps each trial has taken (SB3's ``num_timesteps`` for one trial)."""
-        return int(self.learner.t)
+        """Steps each trial has taken since ``learn`` last reset the count (SB3's ``num_timesteps``, for
+        one trial); the learner's own step, which its schedules follow, is ``learner.t``."""
+        return int(self.learner.t) - self._origin
 
-    def learn(self, total_timesteps: int, *, progress_bar: bool = False) -> SOMQ:
+    def learn(self, total_timesteps: int, callback: Any = None, *, progress_bar: bool = False,
+              reset_num_timesteps: bool = True) -> SOMQ:
         """Train every trial for ``total_timesteps`` more steps; returns the model (as SB3).
+
+        Args:
+          total_timesteps: steps to take, per trial.
+          callback: Stable-Baselines3's callbacks (a ``BaseCallback``, ``EvalCallback``,
+            ``CheckpointCallback``, ``CallbackList``, a list of them, or a function), called as SB3
+            calls them (``somarm.callbacks``); an ``on_step`` that returns False ends ``learn``.
+          progress_bar: draw a progress line on stderr.
+          reset_num_timesteps: count ``num_timesteps`` from 0 again (SB3's default); False goes on
+            counting. The learner's schedules follow its own step either way.
 
         Ctrl-C or SIGTERM stops at the end of a step and keeps what was learned; the model says so
         with a ``LearningInterrupted`` warning and ``interrupted`` (True until the next ``learn``).
@@ -138,6 +155,7 @@ class SOMQ:
             (the refusal ``somarm train`` gives), or the model was loaded from a folder whose curves do
             not cover every step it took (one line).
         """
+        from somarm.callbacks import CallbackHook, as_callback
         from somarm.validation import check_int
 
         steps = check_int("total_timesteps", total_timesteps)
@@ -145,26 +163,47 @@ class SOMQ:
             raise ValueError(self._cannot_learn)
         block = math.gcd(steps, 1000)
         run.check_memory_needs([dataclasses.replace(self.config, n_steps=steps, block=block)])
-        curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
-                      progress=progress_bar, label=f"{self.config.task}/SOMQ", episode_log=self._log)
+        if reset_num_timesteps:
+            self._origin = int(self.learner.t)
+        hook = None
+        if callback is not None:
+            hook = CallbackHook(as_callback(callback, self), self, self.num_timesteps + steps)
+            hook.start()
+        tail = _Tail(block, self.config.n_trials, hook)
+        self._learning = True
+        try:
+            curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
+                          progress=progress_bar, label=f"{self.config.task}/SOMQ", episode_log=self._log,
+                          on_step=tail)
+        finally:
+            self._learning = False
+        if hook is not None:
+            hook.end()
         done = self.learner.t
         self._blocks.append((block, curves.block_means))
         self._squares.append(curves.block_sq_means)
+        if curves.steps_done % block:  # stopped mid-block: that part is a block of its own
+            part = curves.steps_done % block
+            self._blocks.append((part, tail.total[None] / part))
+            self._squares.append(tail.total_sq[None] / part)
         if curves.episodes is not None:
             shifted = dataclasses.replace(curves.episodes, ends=curves.episodes.ends + done - curves.steps_done)
             self._episodes.append(shifted)
         self._wall_time += curves.wall_time
-        self.interrupted = curves.interrupted
-        if curves.interrupted:
+        self.interrupted = curves.interrupted and not (hook is not None and hook.stopped)
+        if self.interrupted:
             warnings.warn(f"SOMQ.learn was stopped by a signal after {curves.steps_done} of {steps} steps; the "
                           f"model keeps what it learned (num_timesteps {done})", LearningInterrupted, stacklevel=2)
         return self
 
-    def predict(self, observation: Any, *, deterministic: bool = True, trial: int = 0) -> tuple[np.ndarray, None]:
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True,
+                *, trial: int = 0) -> tuple[np.ndarray, None]:
         """The greedy action for an observation of the environment, as SB3's ``(action, state)``.
 
         Args:
-          observation: ``(obs_dim,)`` or a batch ``(n, obs_dim)``, the environment's own values.
+          observation: ``(obs_dim,)`` or a batch ``(n, obs_dim)`` (a VecEnv's ``(n_envs, obs_dim)``),
+            the environment's own values.
+          state, episode_start: SB3's recurrent state, taken and not used (SOM-Q has none).
           deterministic: True (greedy); False is refused (SOM-Q explores only while it learns).
           trial: which trial's policy answers.
 
@@ -196,6 +235,59 @@ class SOMQ:
         """The greedy keys of ``summary.json`` (``run.greedy_measures``): for a Gymnasium task the mean
         return of 100 fresh greedy episodes per trial, and its sd over trials."""
         return run.greedy_measures(self.learner, self.task, seed=self.config.seed if seed is None else seed)
+
+    def get_env(self):
+        """The environment being trained, as SB3's ``VecEnv`` (a ``DummyVecEnv`` over trial 0's copy of a
+        Gymnasium environment); None for this project's own tasks, which are no Gymnasium environments.
+
+        Raises:
+          MissingExtra: Stable-Baselines3 is not installed (the ``peers`` extra).
+        """
+        from somarm.tasks.gym_envs import GymTask
+
+        if not isinstance(self.task, GymTask):
+            return None
+        if self._vec_env is None:
+            try:
+                from stable_baselines3.common.vec_env import DummyVecEnv
+            except ImportError:
+                from somarm.extras import missing
+
+                raise missing("peers", "SOMQ.get_env gives Stable-Baselines3's VecEnv") from None
+            env = self.task.env_of(0)
+            self._vec_env = DummyVecEnv([lambda: env])
+        return self._vec_env
+
+    def set_env(self, env: Any) -> None:
+        """Learn on from now on in ``env``: an environment of the same id (made with other keywords, such
+        as another time limit, or wrapped), or its id. The learner and its scaling are kept.
+
+        Raises:
+          ValueError: an environment of another id, or one whose spaces differ (one line).
+        """
+        task, kwargs, given = task_name(env)
+        if task != self.config.task:
+            raise ValueError(f"set_env takes an environment of the model's task {self.config.task}, got {task}")
+        own = {key: self.config.task_params[key] for key in ("observation_low", "observation_high")
+               if key in self.config.task_params}
+        config = dataclasses.replace(self.config, task_params={**kwargs, **own})
+        kept = {name: getattr(self, name) for name in _HISTORY}
+        self._start(config.resolved(), self.learner, given)
+        for name, value in kept.items():
+            setattr(self, name, value)
+
+    def get_vec_normalize_env(self) -> None:
+        """None: SOMQ scales observations itself (SB3's callbacks ask for a ``VecNormalize``)."""
+        return None
+
+    @property
+    def logger(self):
+        """Stable-Baselines3's ``Logger``, writing nothing, for the callbacks that record to it."""
+        if self._logger is None:
+            from stable_baselines3.common.logger import Logger
+
+            self._logger = Logger(folder=None, output_formats=[])
+        return self._logger
 
     def _result(self) -> run.RunResult:
         # Each learn() recorded blocks of its own size: shown at their common divisor, a block's mean
@@ -230,7 +322,9 @@ class SOMQ:
         from somarm.run.claim import claim
 
         result = self._result()
-        extra = run.greedy_summary(result) if result.steps_done else {}
+        # Saved by a callback in the middle of learn (CheckpointCallback), the model is written without
+        # the greedy evaluation, which would cost its episodes at every checkpoint.
+        extra = run.greedy_summary(result) if result.steps_done and not self._learning else {}
         owner = claim(Path(path), force=True, flag="path", what="a saved model")
         try:
             run.write_claimed(result, owner, extra_summary=extra)
@@ -239,17 +333,20 @@ class SOMQ:
         return owner.folder
 
     @classmethod
-    def load(cls, path: str | Path) -> SOMQ:
-        """A model from a run folder (``save``'s, or ``somarm train``'s).
+    def load(cls, path: str | Path, env: Any = None) -> SOMQ:
+        """A model from a run folder (``save``'s, or ``somarm train``'s); with ``env``, one that learns and
+        is evaluated in that environment (``set_env``).
 
         Raises:
-          ValueError: not a run folder, or a damaged one (one line).
+          ValueError: not a run folder, or a damaged one, or an ``env`` ``set_env`` refuses (one line).
         """
         config, learner = run.load(path)
         model = cls.__new__(cls)
         model._start(config, learner)
         if learner.t:
             model._read_history(Path(path))
+        if env is not None:
+            model.set_env(env)
         return model
 
     def _read_history(self, folder: Path) -> None:

@@ -115,13 +115,15 @@ def test_an_environment_object_keeps_its_time_limit_and_keywords_and_renders_not
     assert model.task.max_episode_steps == 50
 
 
-def test_an_environment_object_with_wrappers_added_after_make_is_refused_in_one_line():
+def test_wrappers_that_change_the_action_box_or_the_observation_shape_are_refused_in_one_line():
     import gymnasium
-    from gymnasium.wrappers import ClipAction
+    from gymnasium.wrappers import ClipAction, FrameStackObservation
 
-    with pytest.raises(ValueError, match="ClipAction") as error:
-        SOMQ(ClipAction(gymnasium.make("Pendulum-v1")), seed=0)
+    with pytest.raises(ValueError, match=r"change its action Box from \[\[-2.0\], \[2.0\]\] to \[\[-inf\]") as error:
+        SOMQ(ClipAction(gymnasium.make("Pendulum-v1")), seed=0)  # ClipAction's Box is unbounded
     assert "\n" not in str(error.value)
+    with pytest.raises(ValueError, match=r"change its observation shape from \(3,\) to \(2, 3\)"):
+        SOMQ(FrameStackObservation(gymnasium.make("Pendulum-v1"), 2), seed=0)
 
 
 def test_predicted_actions_have_the_action_box_dtype_and_lie_inside_it():

@@ -35,6 +35,7 @@ so an evaluation is bounded whatever ``max_episode_steps`` says; the episodes so
 from __future__ import annotations
 
 import contextlib
+import copy
 import dataclasses
 import functools
 import json
@@ -281,6 +282,26 @@ def _as_number(value: Any) -> Any:
     return value
 
 
+def box_of(space) -> dict[str, np.ndarray]:
+    """An observation Box's bounds as ``describe`` gives them (1e6 or more counts as none)."""
+    low, high = np.asarray(space.low, dtype=np.float64), np.asarray(space.high, dtype=np.float64)
+    return {"observation_low": np.where(low <= -_UNBOUNDED, -np.inf, low),
+            "observation_high": np.where(high >= _UNBOUNDED, np.inf, high)}
+
+
+def copy_of(env: Any) -> Any:
+    """A copy of an environment object with its wrappers (``copy.deepcopy``), for more trials or the
+    greedy episodes of a task built on a given environment.
+
+    Raises:
+      ValueError: the environment cannot be copied (one line).
+    """
+    try:
+        return copy.deepcopy(env)
+    except Exception as exc:
+        raise ValueError(f"the environment {env} cannot be copied ({_said(exc)}): give n_trials=1, or its id") from None
+
+
 def _kwargs_json(params: GymParams) -> str:
     return json.dumps(dict(params.kwargs), sort_keys=True)
 
@@ -299,15 +320,18 @@ def _check_bounds(params: GymParams, size: int) -> None:
         raise ValueError("observation_low and observation_high must be finite with high > low in every dimension")
 
 
-def estimate_bounds(params: GymParams, seed: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def estimate_bounds(params: GymParams, seed: int, *, env: Any = None) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Scaling bounds where the observation Box is infinite: the 1% and 99% quantiles of
     ``_ESTIMATE_STEPS`` observations under uniformly random actions (episodes reset with seeds of the
     run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite,
     and the environment's own range where ``KNOWN_RANGES`` gives one; then the dimensions ``WIDENED``
-    names widened about their middles."""
+    names widened about their middles. With ``env`` (an environment object, wrapped after
+    ``gymnasium.make``), a copy of it is stepped and its own observation Box taken instead."""
     facts = describe(params.env_id, _kwargs_json(params))
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["scaling"],))))
-    env = params.make_env()
+    if env is not None:
+        facts = {**facts, **box_of(env.observation_space)}
+    env = params.make_env() if env is None else copy_of(env)
     seen = []
     try:
         observation, _ = env.reset(seed=int(rng.integers(2**31)))
@@ -348,12 +372,15 @@ class GymTask(TaskBase):
       params: a ``GymParams`` with its scaling bounds (``GymRecord.complete`` fills them in).
       n_trials, seed, trial_ids: as every batched task (trial i is the same alone or batched).
       backend: only "gymnasium" (the environment's own ``step``).
+      env: an environment object to train in as given, wrappers and all (``SOMQ`` given one): trial 0
+        steps it, the other trials and the greedy episodes step copies of it (``copy_of``). Its
+        spaces' shapes and action bounds are those of ``gymnasium.make`` of its id.
     """
 
     episodic = True
 
     def __init__(self, params: GymParams, *, n_trials: int = 1, seed: int = 0,
-                 trial_ids: np.ndarray | None = None, backend: str = "gymnasium"):
+                 trial_ids: np.ndarray | None = None, backend: str = "gymnasium", env: Any = None):
         if backend != "gymnasium":
             raise ValueError(f"{PREFIX}{params.env_id} runs in gymnasium (its own step), got backend {backend!r}")
         facts = describe(params.env_id, _kwargs_json(params))
@@ -377,7 +404,9 @@ class GymTask(TaskBase):
         #: greedy episodes (``run_episodes``) are cut after this many steps where the time limit is longer or absent
         self.evaluation_steps = params.evaluation_steps
         self._generators = trial_generators(seed, self.trial_ids, "task")
-        self._envs = [params.make_env() for _ in range(self.n_trials)]
+        self._given = env
+        self._envs = [params.make_env() for _ in range(self.n_trials)] if env is None else \
+            [env, *(copy_of(env) for _ in range(self.n_trials - 1))]
         self._eval_envs: list[Any] = []
         self._current = np.zeros((self.n_trials, self.scale_low.size))
         self._over = np.ones(self.n_trials, dtype=bool)
@@ -400,10 +429,19 @@ class GymTask(TaskBase):
     def __repr__(self) -> str:
         return f"GymTask({self.params!r}, n_trials={self.n_trials})"
 
+    def _new_env(self):
+        """Another copy of the environment: made from its id and keywords, or of the given one."""
+        return self.params.make_env() if self._given is None else copy_of(self._given)
+
+    def env_of(self, trial: int):
+        """The environment object trial ``trial`` steps."""
+        return self._envs[trial]
+
     def close(self) -> None:
-        """Close every copy of the environment."""
+        """Close every copy of the environment (a given environment stays open: it is its owner's)."""
         for env in self._envs + self._eval_envs:
-            env.close()
+            if env is not self._given:
+                env.close()
 
     # -- the boundary with Gymnasium -------------------------------------------------------
     def scale(self, observations: Any) -> np.ndarray:
@@ -461,7 +499,7 @@ class GymTask(TaskBase):
 
     def sample_observations(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` scaled first observations ``(n, obs_dim)`` of episodes reset with seeds drawn from ``rng``."""
-        env = self.params.make_env()
+        env = self._new_env()
         try:
             return np.array([self.scale(env.reset(seed=int(s))[0]) for s in self.sample_starts(rng, n)])
         finally:
@@ -492,7 +530,7 @@ class GymTask(TaskBase):
         seeds = np.asarray(starts, dtype=np.int64).reshape(-1)
         m = seeds.size
         while len(self._eval_envs) < m:
-            self._eval_envs.append(self.params.make_env())
+            self._eval_envs.append(self._new_env())
         envs = self._eval_envs[:m]
         current = np.array([self.scale(env.reset(seed=int(s))[0]) for env, s in zip(envs, seeds, strict=True)])
         running = np.ones(m, dtype=bool)
