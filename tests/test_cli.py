@@ -375,3 +375,14 @@ def test_the_full_parser_and_the_one_a_command_builds_agree():
     train = full._subparsers._group_actions[0].choices["train"]._actions
     assert [a.dest for a in train] == [a.dest for a in own._subparsers._group_actions[0].choices["train"]._actions]
     assert {"task", "learner", "seed", "n_trials", "n_steps"} <= {a.dest for a in train}  # the run settings
+
+
+@pytest.mark.parametrize(("argv", "expected"), [
+    (["compare", "reach2", "--ray-address", "10.0.0.1:6379"], "--ray-address is for --engine ray: give both, or neither"),
+    (["reproduce", "--quick", "--ray-address", "10.0.0.1:6379"], "--ray-address is for --engine ray"),
+    (["compare", "reach2", "--engine", "ray", "--ray-address", " "], "--ray-address needs an address (HOST:PORT"),
+    (["reproduce", "--engine", "spark"], "argument --engine: invalid choice: 'spark'"),
+])
+def test_engine_options_are_checked_before_anything_is_written(argv, expected, capsys, tmp_path):
+    _one_line_error(capsys, main([*argv, "--out", str(tmp_path / "x")]), expected)
+    assert not (tmp_path / "x").exists()
