@@ -386,3 +386,17 @@ def test_the_full_parser_and_the_one_a_command_builds_agree():
 def test_engine_options_are_checked_before_anything_is_written(argv, expected, capsys, tmp_path):
     _one_line_error(capsys, main([*argv, "--out", str(tmp_path / "x")]), expected)
     assert not (tmp_path / "x").exists()
+
+
+def test_engine_ray_without_ray_names_the_extra_in_one_line(capsys, tmp_path, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "ray" else real(name, *a))
+    _one_line_error(capsys, main(["compare", "reach2", "--engine", "ray", "--out", str(tmp_path / "x")]),
+                    "--engine ray needs Ray")
+    assert not (tmp_path / "x").exists()
+    with pytest.raises(ImportError, match=r"\[sweep\]"):  # from Python: an ImportError, as for any missing extra
+        from somarm import cluster
+
+        cluster.check_engine("ray", None)

@@ -133,3 +133,22 @@ def test_into_a_pipe_there_is_no_bar_and_every_line_is_whole(tmp_path):
     lines = [line for line in done.stderr.splitlines() if not re.match(r"\d+/2 done, \d running", line)]
     assert sorted(re.sub(r"\d+(\.\d+)?( s)?$", "N", line) for line in lines) == sorted(
         ["reach2: started in process N", "throw: started in process N", "reach2: N", "throw: N"])
+
+
+def test_a_failed_piece_is_counted_apart_and_leaves_the_time_left(monkeypatch):
+    clock = _Clock()
+    monkeypatch.setattr(status_module.time, "monotonic", clock)
+    show = Status(["td3 seed 0", "td3 seed 1", "sac seed 0"], workers=2, expected={}, stream=io.StringIO())
+    show.started("td3 seed 0", "on the cluster")
+    show.started("td3 seed 1", "on the cluster")
+    clock.now += 10
+    show.expected.update({"td3 seed 0": 10.0, "td3 seed 1": 10.0})  # learned from the first td3 unit
+    show.finished("td3 seed 0")
+    show.failed("td3 seed 1")
+    assert show.line().startswith("1/3 done, 0 running, 1 failed")
+    assert "time left unknown" in show.line()  # sac has no finished unit to go by yet
+    show.expected["sac seed 0"] = 4.0
+    show.started("sac seed 0", "on the cluster")
+    assert show.seconds_left() == 4.0  # the failed unit is not waited for
+    show.finished("sac seed 0")
+    assert show.line().endswith("all done")
