@@ -335,16 +335,20 @@ class SOMQ:
     @classmethod
     def load(cls, path: str | Path, env: Any = None) -> SOMQ:
         """A model from a run folder (``save``'s, or ``somarm train``'s); with ``env``, one that learns and
-        is evaluated in that environment (``set_env``).
+        is evaluated in that environment (``set_env``). ``NAME.zip``, SB3's name, finds the folder
+        ``NAME`` where there is no ``NAME.zip``.
 
         Raises:
           ValueError: not a run folder, or a damaged one, or an ``env`` ``set_env`` refuses (one line).
         """
+        path = Path(path)
+        if not path.exists() and path.suffix == ".zip" and path.with_suffix("").is_dir():
+            path = path.with_suffix("")  # SB3's name for what SOMQ.save wrote without the suffix
         config, learner = run.load(path)
         model = cls.__new__(cls)
         model._start(config, learner)
         if learner.t:
-            model._read_history(Path(path))
+            model._read_history(path)
         if env is not None:
             model.set_env(env)
         return model
