@@ -112,7 +112,7 @@ class SOMQ:
 
     def _start(self, config: RunConfig, learner: Learner | None = None, env: Any = None) -> None:
         self.config = config
-        self.env = env  #: the environment object given, trained in as it is (None: copies made from the id)
+        self.given_env = env  #: the environment object given, trained in as it is (None: copies made from the id)
         self.task: BatchedTask = run.make_task(config) if env is None else task_on(config, env)
         self.learner: Learner = learner if learner is not None else run.make_learner(config, self.task)
         self.task.continue_at(self.learner.t)  # a loaded model meets new starts, not its first ones again
@@ -134,8 +134,8 @@ class SOMQ:
         one trial); the learner's own step, which its schedules follow, is ``learner.t``."""
         return int(self.learner.t) - self._origin
 
-    def learn(self, total_timesteps: int, callback: Any = None, *, progress_bar: bool = False,
-              reset_num_timesteps: bool = True) -> SOMQ:
+    def learn(self, total_timesteps: int, callback: Any = None, log_interval: int | None = None,
+              tb_log_name: str | None = None, reset_num_timesteps: bool = True, progress_bar: bool = False) -> SOMQ:
         """Train every trial for ``total_timesteps`` more steps; returns the model (as SB3).
 
         Args:
@@ -143,6 +143,8 @@ class SOMQ:
           callback: Stable-Baselines3's callbacks (a ``BaseCallback``, ``EvalCallback``,
             ``CheckpointCallback``, ``CallbackList``, a list of them, or a function), called as SB3
             calls them (``somarm.callbacks``); an ``on_step`` that returns False ends ``learn``.
+          log_interval, tb_log_name: SB3's, taken so that SB3 code runs, and not used (SOMQ logs
+            nothing; its curves go to the run folder ``save`` writes).
           progress_bar: draw a progress line on stderr.
           reset_num_timesteps: count ``num_timesteps`` from 0 again (SB3's default); False goes on
             counting. The learner's schedules follow its own step either way.
@@ -235,6 +237,11 @@ class SOMQ:
         """The greedy keys of ``summary.json`` (``run.greedy_measures``): for a Gymnasium task the mean
         return of 100 fresh greedy episodes per trial, and its sd over trials."""
         return run.greedy_measures(self.learner, self.task, seed=self.config.seed if seed is None else seed)
+
+    @property
+    def env(self):
+        """SB3's ``model.env``: ``get_env()``."""
+        return self.get_env()
 
     def get_env(self):
         """The environment being trained, as SB3's ``VecEnv`` (a ``DummyVecEnv`` over trial 0's copy of a

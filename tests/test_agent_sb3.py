@@ -103,7 +103,7 @@ def test_a_wrapped_environment_is_trained_in_as_given():
     ends = np.diff(np.concatenate([[0], model._episodes[0].ends]))
     np.testing.assert_allclose(monitor.get_episode_rewards(), model._episodes[0].returns, rtol=1e-5)
     assert ends.tolist() == [50] * 10
-    assert isinstance(model.get_env(), VecEnv) and model.get_env().envs[0] is model.env
+    assert isinstance(model.get_env(), VecEnv) and model.env.envs[0] is model.given_env is monitor
     normalized = SOMQ(NormalizeObservation(gymnasium.make("Pendulum-v1")), seed=0)  # an infinite Box
     low, high = normalized.config.task_params["observation_low"], normalized.config.task_params["observation_high"]
     assert all(-10 < lo < hi < 10 for lo, hi in zip(low, high, strict=True))  # estimated on a copy of it
