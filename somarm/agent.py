@@ -29,7 +29,8 @@ Where it differs from SB3, and why:
   shape are refused (the action map and the run folder hold those).
 - ``learn`` takes SB3's callbacks (``somarm.callbacks``); ``num_timesteps`` counts the steps of one
   trial since ``learn`` last reset it, while the learner's schedules follow its own step ``learner.t``.
-  A model saved by a callback in the middle of ``learn`` is written without the greedy evaluation.
+  A model saved by a callback in the middle of ``learn`` holds its curves so far (it learns on once
+  loaded) and is written without the greedy evaluation.
 - A loaded model learns on from the saved step: its episodes start from streams of their own for that
   step, and its curves (read back from the folder) go on where they stopped.
 """
@@ -39,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import time
 import warnings
 import zipfile
 import zlib
@@ -60,21 +62,39 @@ class LearningInterrupted(UserWarning):
     """``SOMQ.learn`` was stopped by Ctrl-C or SIGTERM before it took every step asked for."""
 
 
-class _Tail:
-    """The training loop's ``on_step`` hook of ``learn``: the rewards since the last whole block (so a
-    learn stopped mid-block keeps a curve of every step), then the callbacks' hook if there is one."""
+class _Curves:
+    """The training loop's ``on_step`` hook of ``learn``: the learning curve of the call in progress (so a
+    model saved by a callback in the middle of it, or a call stopped mid-block, has a curve of every
+    step), then the callbacks' hook if there is one."""
 
     def __init__(self, block: int, n_trials: int, then: Any = None) -> None:
         self.block, self.then = block, then
+        self.step = 0
+        self.means: list[np.ndarray] = []  # each whole block's mean reward per trial
+        self.squares: list[np.ndarray] = []  # and mean squared reward
         self.total, self.total_sq = np.zeros(n_trials), np.zeros(n_trials)
+        self.started = time.perf_counter()
 
     def __call__(self, step: int, observations: np.ndarray, actions: np.ndarray, rewards: np.ndarray) -> None:
-        if (step - 1) % self.block == 0:
-            self.total[:], self.total_sq[:] = 0.0, 0.0
+        self.step = step
         self.total += rewards
         self.total_sq += rewards * rewards
+        if step % self.block == 0:
+            self.means.append(self.total / self.block)
+            self.squares.append(self.total_sq / self.block)
+            self.total, self.total_sq = np.zeros_like(self.total), np.zeros_like(self.total_sq)
         if self.then is not None:
             self.then(step, observations, actions, rewards)
+
+    def parts(self) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        """``(block size, means (n, n_trials), squares (n, n_trials))`` of the whole blocks so far, then
+        of the steps since the last one, as a block of their own."""
+        n_trials = self.total.size
+        out = [(self.block, np.array(self.means).reshape(-1, n_trials), np.array(self.squares).reshape(-1, n_trials))]
+        part = self.step % self.block
+        if part:
+            out.append((part, self.total[None] / part, self.total_sq[None] / part))
+        return out
 
 
 #: What a model keeps of its past when ``set_env`` gives it another environment.
@@ -124,7 +144,7 @@ class SOMQ:
         self._cannot_learn: str | None = None
         self.interrupted = False  #: the last ``learn`` was stopped by Ctrl-C or SIGTERM before its end
         self._origin = 0  # the learner's step at which num_timesteps last started from 0
-        self._learning = False
+        self._learning: _Curves | None = None  # the curves of the learn() in progress
         self._vec_env = None
         self._logger = None
 
@@ -171,23 +191,20 @@ class SOMQ:
         if callback is not None:
             hook = CallbackHook(as_callback(callback, self), self, self.num_timesteps + steps)
             hook.start()
-        tail = _Tail(block, self.config.n_trials, hook)
-        self._learning = True
+        self._learning = _Curves(block, self.config.n_trials, hook)
         try:
             curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
                           progress=progress_bar, label=f"{self.config.task}/SOMQ", episode_log=self._log,
-                          on_step=tail)
+                          on_step=self._learning)
+            parts = self._learning.parts()
         finally:
-            self._learning = False
+            self._learning = None
         if hook is not None:
             hook.end()
         done = self.learner.t
-        self._blocks.append((block, curves.block_means))
-        self._squares.append(curves.block_sq_means)
-        if curves.steps_done % block:  # stopped mid-block: that part is a block of its own
-            part = curves.steps_done % block
-            self._blocks.append((part, tail.total[None] / part))
-            self._squares.append(tail.total_sq[None] / part)
+        for size, means, squares in parts:
+            self._blocks.append((size, means))
+            self._squares.append(squares)
         if curves.episodes is not None:
             shifted = dataclasses.replace(curves.episodes, ends=curves.episodes.ends + done - curves.steps_done)
             self._episodes.append(shifted)
@@ -298,21 +315,41 @@ class SOMQ:
 
     def _result(self) -> run.RunResult:
         # Each learn() recorded blocks of its own size: shown at their common divisor, a block's mean
-        # standing for each of its parts.
-        block = math.gcd(*(size for size, _ in self._blocks)) if self._blocks else 1
+        # standing for each of its parts. Saved in the middle of a learn() (a callback), with its curve so far.
+        parts = list(zip(self._blocks, self._squares, strict=True))
+        episodes_parts, wall_time = list(self._episodes), self._wall_time
+        if self._learning is not None:
+            parts += [((size, means), squares) for size, means, squares in self._learning.parts()]
+            if self._log is not None:
+                episodes_parts.append(self._pending_episodes())
+            wall_time += time.perf_counter() - self._learning.started
+        parts = [part for part in parts if len(part[0][1])]
+        block = math.gcd(*(size for (size, _), _ in parts)) if parts else 1
         blocks = np.zeros((0, self.config.n_trials))
         squares = np.zeros((0, self.config.n_trials))
-        for (size, means), sq in zip(self._blocks, self._squares, strict=True):
+        for (size, means), sq in parts:
             blocks = np.concatenate([blocks, np.repeat(means, size // block, axis=0)])
             squares = np.concatenate([squares, np.repeat(sq, size // block, axis=0)])
         episodes = None
-        if self._episodes:
-            episodes = Episodes(*(np.concatenate([getattr(e, name) for e in self._episodes])
+        if episodes_parts:
+            episodes = Episodes(*(np.concatenate([getattr(e, name) for e in episodes_parts])
                                   for name in ("ends", "trials", "returns", "lengths")))
         config = dataclasses.replace(self.config, n_steps=max(block, len(blocks) * block), block=block)
         return run.RunResult(config=config, learner=self.learner, task=self.task, block_means=blocks,
-                             block_sq_means=squares, steps_done=int(self.learner.t), wall_time=self._wall_time,
+                             block_sq_means=squares, steps_done=int(self.learner.t), wall_time=wall_time,
                              episodes=episodes)
+
+    def _pending_episodes(self) -> Episodes:
+        """The training episodes that ended so far in the learn() in progress, at the learner's steps."""
+        ended = self._log.ended
+        shift = int(self.learner.t) - self._learning.step
+        if not ended:
+            empty = np.zeros(0)
+            return Episodes(empty.astype(np.int64), empty.astype(np.int64), empty, empty.astype(np.int64))
+        return Episodes(np.concatenate([np.full(len(o), s + shift) for s, o, _, _ in ended]).astype(np.int64),
+                        np.concatenate([o for _, o, _, _ in ended]).astype(np.int64),
+                        np.concatenate([r for _, _, r, _ in ended]),
+                        np.concatenate([n for _, _, _, n in ended]).astype(np.int64))
 
     def save(self, path: str | Path) -> Path:
         """Write a run folder (``learner.npz``, ``config.json``, ``curves.npz``, ``summary.json``, figures)
@@ -331,7 +368,7 @@ class SOMQ:
         result = self._result()
         # Saved by a callback in the middle of learn (CheckpointCallback), the model is written without
         # the greedy evaluation, which would cost its episodes at every checkpoint.
-        extra = run.greedy_summary(result) if result.steps_done and not self._learning else {}
+        extra = run.greedy_summary(result) if result.steps_done and self._learning is None else {}
         owner = claim(Path(path), force=True, flag="path", what="a saved model")
         try:
             run.write_claimed(result, owner, extra_summary=extra)

@@ -74,7 +74,16 @@ def test_eval_and_checkpoint_callbacks_evaluate_and_save_loadable_models(tmp_pat
     saved = SOMQ.load(tmp_path / "ck" / "rl_model_1000_steps.zip")
     observation = np.array([0.3, -0.9, 1.5])
     assert saved.num_timesteps == 1000 and saved.predict(observation)[0] == model.predict(observation)[0]
-    SOMQ.load(tmp_path / "best" / "best_model").predict(observation)
+    SOMQ.load(tmp_path / "best" / "best_model.zip").predict(observation)  # SB3's name for the folder
+    halfway = SOMQ.load(tmp_path / "ck" / "rl_model_500_steps.zip")  # saved in the middle of learn
+    assert halfway.num_timesteps == 500
+    halfway.learn(500, reset_num_timesteps=False)  # its curves cover every step: it learns on
+    assert halfway.num_timesteps == 1000
+    halfway.save(tmp_path / "on")
+    with np.load(tmp_path / "on" / "curves.npz") as curves:
+        assert len(curves["block_means"]) * int(curves["block"]) == 1000
+        # Pendulum's 200-step episodes: two before the checkpoint, two from new starts after the load
+        assert curves["episode_ends"].tolist() == [200, 400, 700, 900]
 
 
 def test_evaluate_policy_takes_the_model_on_a_vec_env_and_on_a_monitor_env_and_agrees_with_evaluate():
