@@ -130,30 +130,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
                 running[connection] = (name, process)
                 status.started(name, f"in process {process.pid}")
             for connection in wait(list(running), timeout=_status_period(status)):
-                name, process = running[connection]
-                try:
-                    kind, payload = connection.recv()
-                except EOFError:
-                    process.join()
-                    kind, payload = "crash", f"its process ended without an answer (exit code {process.exitcode})"
-                if kind == "progress":
-                    status.progress(name, *payload)
-                    continue
-                del running[connection]
-                status.finished(name)
-                if kind == "ok":
-                    if waiting:
-                        idle.append((connection, process))
-                    else:  # nothing left for it: it ends now, beside the others' last experiments
-                        connection.send(None)
-                    with status.above():
-                        finished(name, payload)
-                elif kind == "interrupted":
-                    raise KeyboardInterrupt
-                elif kind == "error":
-                    raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
-                else:
-                    raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
+                _answer(connection, running, idle, status, finished, more=bool(waiting))
             status.draw()
     except KeyboardInterrupt:
         status.close()
@@ -163,6 +140,40 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, jobs
         status.close()
         _stop(workers)
     return 0
+
+
+def _answer(connection, running: dict, idle: list, status: Status, finished: Callable[[str, Section], None], *,
+            more: bool) -> None:
+    """Read one message of a running worker: its progress, or its experiment's end (then the worker is
+    idle again if ``more`` experiments wait, else told to end).
+
+    Raises:
+      KeyboardInterrupt, ValueError, RuntimeError: as ``run`` (the worker stopped, could not write, or crashed).
+    """
+    name, process = running[connection]
+    try:
+        kind, payload = connection.recv()
+    except EOFError:
+        process.join()
+        kind, payload = "crash", f"its process ended without an answer (exit code {process.exitcode})"
+    if kind == "progress":
+        status.progress(name, *payload)
+        return
+    del running[connection]
+    status.finished(name)
+    if kind == "ok":
+        if more:
+            idle.append((connection, process))
+        else:  # nothing left for it: it ends now, beside the others' last experiments
+            connection.send(None)
+        with status.above():
+            finished(name, payload)
+    elif kind == "interrupted":
+        raise KeyboardInterrupt
+    elif kind == "error":
+        raise ValueError(f"{payload}; {name} stopped (and the experiments running beside it)")
+    else:
+        raise RuntimeError(f"experiment {name} failed in its worker process: {payload}")
 
 
 def _status_period(status: Status) -> float:

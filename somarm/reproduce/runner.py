@@ -139,17 +139,8 @@ def reproduce(
 
     experiments = {name: {**EXPERIMENTS, **OPTIONAL}[name] for name in names}
     try:
-        if engine == "ray":
-            status = _run_on_ray(experiments, out, quick=quick, seeds=all_seeds, progress=progress, backend=backend,
-                                 address=address, finished=finished)
-        elif min(jobs, len(experiments)) > 1:  # one experiment alone runs here, with its progress bars
-            from somarm.reproduce import parallel
-
-            status = parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=all_seeds, backend=backend,
-                                  finished=finished, progress=progress)
-        else:
-            status = _run_in_turn(experiments, out, quick=quick, seeds=all_seeds, progress=progress,
-                                  backend=backend, finished=finished)
+        status = _run(experiments, out, quick=quick, seeds=all_seeds, progress=progress, backend=backend, jobs=jobs,
+                      engine=engine, address=address, finished=finished)
     except ValueError as exc:  # an experiment could not write (a full disk): keep the report so far
         _keep_report(out, sections, total=time.perf_counter() - start, **settings)
         raise ValueError(f"{exc}, the report keeps the {len(sections)} experiment(s) that finished") from None
@@ -165,6 +156,23 @@ def _print_summary(sections: list[Section], report: Path, *, seeds: int, total: 
     claims = sum(len(s.claims) for s in sections)
     over = f" in every one of {seeds} seeds" if seeds > 1 else ""
     print(f"report: {report} ({held} of {claims} claims hold{over}; {total:.1f} s)")
+
+
+def _run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quick: bool, seeds: tuple[int, ...],
+         progress: bool, backend: str, jobs: int, engine: str, address: str | None,
+         finished: Callable[[str, Section], None]) -> int:
+    """The experiments on the cluster (``engine="ray"``), in worker processes (``jobs`` > 1 and more than
+    one experiment), or one after another here; 0, or 130 when interrupted."""
+    if engine == "ray":
+        return _run_on_ray(experiments, out, quick=quick, seeds=seeds, progress=progress, backend=backend,
+                           address=address, finished=finished)
+    if min(jobs, len(experiments)) > 1:  # one experiment alone runs here, with its progress bars
+        from somarm.reproduce import parallel
+
+        return parallel.run(experiments, out, jobs=jobs, quick=quick, seeds=seeds, backend=backend,
+                            finished=finished, progress=progress)
+    return _run_in_turn(experiments, out, quick=quick, seeds=seeds, progress=progress, backend=backend,
+                        finished=finished)
 
 
 def _run_on_ray(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quick: bool,
