@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import pytest
+from ray_home import ray_home
 
 from somarm.peers import compare
 
@@ -33,14 +34,13 @@ CONFIG = compare.CompareConfig(task="reach2", learners=("somq", "tabular"), samp
 
 
 @pytest.fixture(scope="module")
-def cluster(tmp_path_factory):
+def cluster():
     """A local Ray of 2 CPUs for the module; its address (drivers in other processes join it)."""
     from somarm.sweep.ray_engine import start_local
 
-    home = tmp_path_factory.mktemp("home")
     state = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Ray's socket paths must fit 107 bytes
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("HOME", str(home))  # where Ray writes its auth token
+        patch.setenv("HOME", str(ray_home()))  # where Ray writes its auth token (one folder per process)
         patch.setenv("RAY_TMPDIR", state)
         start_local(2, _temp_dir=state)
         try:

@@ -12,6 +12,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from ray_home import ray_home
 
 from somarm.sweep import SweepSpec, parse_grid, run_sweep
 
@@ -32,7 +33,7 @@ def ray_cluster(tmp_path, monkeypatch):
     real_home = Path.home()
     had_ray_folder = (real_home / ".ray").exists()
     state = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Ray's socket paths must fit 107 bytes
-    monkeypatch.setenv("HOME", str(tmp_path / "home"))  # where Ray writes its auth token
+    monkeypatch.setenv("HOME", str(ray_home()))  # where Ray writes its auth token (one folder per process)
     monkeypatch.setenv("RAY_TMPDIR", state)
     start_local(1, _temp_dir=state)
     try:
