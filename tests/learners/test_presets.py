@@ -65,8 +65,11 @@ def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
         # no random units and no perturbations: optimistic initial values alone explore
         assert c.p.value(0) == 0 and c.epsilon.value(0) == 0
         assert c.action_init == "grid" and c.lambda_a.value(0) == 0
-        # a frozen grid; its Q neighbourhood spreads only over InvertedPendulum's 11 close torques
-        assert (c.n_a.value(0) > 0) == (name == "invertedpendulum")
+        # a frozen grid; its Q neighbourhood spreads only over InvertedPendulum's 11 close torques and
+        # Reacher-v5's 3x3 grid (whose parabola needs a torque's neighbours' values)
+        assert (c.n_a.value(0) > 0) == (name in ("invertedpendulum", "reacher"))
+        # the paper's one input map, except on Reacher-v5's 10 observed dimensions
+        assert c.grouped == (name == "reacher")
         assert c.response == "interpolated"
     # optimism: above every discounted return (Pendulum's rewards are <= 0; an InvertedPendulum step
     # earns 1, so at most 1 / (1 - 0.99) = 100); MountainCar's q_init only above the goal's value from
