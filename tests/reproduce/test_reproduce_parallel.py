@@ -80,6 +80,8 @@ def test_ctrl_c_stops_every_worker_and_keeps_the_finished_experiments(tmp_path):
         proc.kill()
     assert proc.returncode == 130, "".join(lines) + err
     assert "Traceback" not in err
+    # Into a pipe the status is whole lines, never a bar redrawn with carriage returns.
+    assert "\r" not in "".join(lines) + err and "█" not in "".join(lines) + err
     claims = runner.load_claims(tmp_path)
     assert claims["complete"] is False and list(claims["experiments"]) == ["throw"]
     assert len(pids) == 2
