@@ -111,11 +111,13 @@ def _why(exc: BaseException) -> str:
 
 
 def run_units(units: Sequence[Unit], *, on_done: Callable[[Unit, Any], None], address: str | None = None,
-              progress: bool = True) -> list[tuple[Unit, str]]:
+              progress: bool = True, expected: dict[str, float] | None = None) -> list[tuple[Unit, str]]:
     """Run ``units`` on the Ray cluster at ``address`` (None: a local one, started and stopped here).
 
     ``on_done(unit, result)`` is called in this process as each unit comes back (what it prints goes
-    above the status line). Ctrl-C cancels the units in flight and is raised again.
+    above the status line). ``expected``: seconds each unit is expected to take, by name, until
+    units of its kind have finished (then their mean). Ctrl-C cancels the units in flight and is
+    raised again.
 
     Returns:
       The units that failed, each with one line saying why (the others were all handed to ``on_done``).
@@ -134,7 +136,8 @@ def run_units(units: Sequence[Unit], *, on_done: Callable[[Unit, Any], None], ad
     seconds: dict[str, list[float]] = {}
     try:
         capacity = max(1.0, float(ray.cluster_resources().get("CPU", 1.0)))
-        status = Status([u.name for u in units], workers=int(capacity), expected={}, enabled=progress)
+        status = Status([u.name for u in units], workers=int(capacity), expected=dict(expected or {}),
+                        enabled=progress)
         waiting = list(units)
         try:
             while waiting or in_flight:

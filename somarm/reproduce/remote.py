@@ -56,6 +56,7 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quic
         missing or the cluster cannot be joined.
     """
     from somarm import cluster
+    from somarm.reproduce.parallel import expected_durations
 
     units = [cluster.Unit(name, run_remote_experiment, (experiment, quick, seeds, backend), kind=name)
              for name, experiment in experiments.items()]
@@ -69,7 +70,8 @@ def run(experiments: dict[str, Callable[[Context], Section]], out: Path, *, quic
         finished(unit.name, section)
 
     try:
-        failed = cluster.run_units(units, on_done=keep, address=address, progress=progress)
+        failed = cluster.run_units(units, on_done=keep, address=address, progress=progress,
+                                   expected=expected_durations(quick, len(seeds)))
     except KeyboardInterrupt:
         print("\ninterrupted; the report holds the experiments that finished", file=sys.stderr, flush=True)
         return 130
