@@ -133,3 +133,23 @@ def test_the_claim_counts_in_the_readme_and_the_home_page_are_the_reports_own():
     partly = re.findall(r"(\d+) at (\d+) of (\d+)", said.group(3))
     stated = sorted((int(h) for k, h, _ in partly for _ in range(int(k))), reverse=True)
     assert stated == some and all(int(total) == n for _, _, total in partly)
+
+
+def test_every_install_line_that_pulls_torch_installs_its_cpu_build_first():
+    # An extra with torch in it (peers) installed without the CPU index first resolves a CUDA build of
+    # several GB; every such line of the README and the docs says how, on it or on the line before.
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # Python 3.10: the test extra installs tomli there
+        import tomli as tomllib
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    with_torch = {name for name, needs in extras.items() if any(n.startswith("torch") for n in needs)}
+    assert with_torch
+    for page in PAGES:
+        lines = page.read_text().splitlines()
+        for i, line in enumerate(lines):
+            for wanted in re.findall(r"pip install [^`\n]*?\[([a-z,]+)\]", line):
+                if with_torch & set(wanted.split(",")):
+                    around = line + (lines[i - 1] if i else "")
+                    assert "download.pytorch.org/whl/cpu" in around, f"{page.name}:{i + 1}: {line}"
