@@ -27,7 +27,7 @@ def python(code: str, *, timeout: float = 120) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV, timeout=timeout)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
 def test_a_signal_during_the_greedy_evaluation_cuts_it_and_writes_the_trained_run(tmp_path, sig):
     out = tmp_path / "run"
     # Episodes 10^8 steps long: without a cut the evaluation would run for days.
