@@ -241,6 +241,8 @@ class SOMQ(MapLearner):
             start = [min(growing.START, size) for size in full] if cfg.grow_every else list(full)
             self._shapes = np.tile(np.array(start, dtype=np.int64), (self.n_trials, n_maps, 1))
             self._errors = np.zeros((self.n_trials, n_maps * n_s))
+            # No one input map of (n_units, obs_dim) units to draw: figures and views of a map skip it.
+            self.has_maps = False
         else:
             self._group_units = np.zeros((self.n_trials, 1, 1), dtype=np.int64)
             self._phi = np.zeros((self.n_trials, 1, 1))

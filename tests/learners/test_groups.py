@@ -200,3 +200,15 @@ def test_the_memory_check_before_a_task_is_built_takes_index_lists_beyond_its_lo
     config = dataclasses.replace(presets.get("invertedpendulum"), input_groups="1,3;0,2")
     what, n_bytes = somq.SOMQ.memory_needed(config, n_trials=2, obs_dim=1, action_dim=1)
     assert "2 input map(s)" in what and n_bytes > 0
+
+
+def test_grouped_maps_say_they_have_no_one_input_map_to_draw_and_a_run_folder_is_written(tmp_path):
+    from somarm import run
+    from somarm.run import RunConfig
+
+    learner = SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="pairs"), **BOX4)
+    assert not learner.has_maps and SOMQ(SOMQConfig(), **BOX4).has_maps
+    result = run.train(RunConfig(task="reach2", n_trials=1, n_steps=50, block=25, seed=1,
+                                 overrides={"input_groups": "singles", "input_shape": (3, 3)}), progress=False)
+    run.write(result, tmp_path / "run")  # with the figures
+    assert (tmp_path / "run" / "learning_curve.png").exists()
