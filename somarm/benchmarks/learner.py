@@ -45,13 +45,15 @@ CASES = (
 
 #: The input representations (``input_groups``, ``k_nearest``, ``grow_every``) at Reacher-v5's size: 10
 #: observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
+_ONE_MAP = {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0}
+_PAIRS = {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0}
 REPRESENTATIONS = (
-    ("one 20x20 map (the paper's)", {}),
-    ("one 20x20 map, 3 nearest", {"k_nearest": 3}),
-    ("45 pair maps of 10x10", {"input_groups": "pairs", "input_shape": (10, 10)}),
-    ("45 pair maps of 10x10, 3 nearest", {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3}),
-    ("45 pair maps growing to 10x10", {"input_groups": "pairs", "input_shape": (10, 10), "grow_every": 1000}),
-    ("5 maps of 10x10 (chunks:2)", {"input_groups": "chunks:2", "input_shape": (10, 10)}),
+    ("one 20x20 map (the paper's)", _ONE_MAP),
+    ("one 20x20 map, 3 nearest", {**_ONE_MAP, "k_nearest": 3}),
+    ("45 pair maps of 10x10", _PAIRS),
+    ("45 pair maps of 10x10, 3 nearest", {**_PAIRS, "k_nearest": 3}),
+    ("45 pair maps growing to 10x10", {**_PAIRS, "grow_every": 1000}),
+    ("5 maps of 10x10 (chunks:2)", {**_PAIRS, "input_groups": "chunks:2"}),
 )
 
 

@@ -179,7 +179,8 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
     representation: ``input_groups``, ``k_nearest``, ``grow_every``, ``input_shape``, ``response``) can hold
     it, learned on the controller's own ``states`` and ``torques`` (``controller_states``): each step one
     action unit is tried at random and rewarded ``-|a - torque|^2`` (gamma 0), so the greedy unit is the
-    grid torque nearest the controller's as that representation sees the state (Q starts at -1, below
+    grid torque nearest the controller's as that representation sees the state (no neighbourhood over the
+    torques, which would blur their values together; Q starts at -1, below
     what a tried torque earns, so a pair never tried is never the greedy one). Returns the learner's
     greedy policy over raw observations (``task.scale``)."""
     from somarm.learners import make, presets
@@ -187,7 +188,8 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
     from somarm.tasks import gym_envs
 
     config = presets.get(gym_envs.BENCHMARKS[env_id][0]).with_changes(
-        {"gamma": 0.0, "p": 1.0, "p.decay": Constant(), "p.floor": 0.0, "epsilon": 0.0, "q_init": -1.0, **changes})
+        {"gamma": 0.0, "p": 1.0, "p.decay": Constant(), "p.floor": 0.0, "epsilon": 0.0, "q_init": -1.0, "n_a": 0.0,
+         **changes})
     facts = gym_envs.describe(env_id)
     learner = make("somq", config, observation_low=np.zeros(states.shape[1]), observation_high=np.ones(states.shape[1]),
                    action_low=facts["action_low"], action_high=facts["action_high"], seed=seed)
@@ -199,12 +201,12 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
 
 #: The input representations the Reacher-v5 yardsticks learn the PD law through (``somarm.learners.groups``).
 REPRESENTATIONS = (
-    ("one 20x20 map (the paper's)", {"input_groups": "all", "input_shape": (20, 20)}),
+    ("one 20x20 map (the paper's)", {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1}),
     ("one 20x20 map, its 3 nearest units", {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 3}),
     ("45 maps of 10x10, one per pair of dimensions", {"input_groups": "pairs", "input_shape": (10, 10),
                                                       "k_nearest": 1}),
-    ("45 pair maps of 10x10, their 3 nearest units", {"input_groups": "pairs", "input_shape": (10, 10),
-                                                      "k_nearest": 3}),
+    ("45 pair maps of 10x10, their 3 nearest units (the reacher preset's)",
+     {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3}),
     ("45 pair maps growing to 10x10 (a row or column every 1,000 steps), their 3 nearest units",
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "grow_every": 1000}),
 )
