@@ -470,59 +470,22 @@ def _benchmarks() -> tuple[Preset, ...]:
         n_trials=5)
     invertedpendulum = _benchmark(
         "invertedpendulum", "InvertedPendulum-v5",
-        {"gamma": 0.99, "q_init": 100.0, "action_shape": (11,), "grid_span": 1.0 / 6.0,
+        {"gamma": 0.995, "q_init": 200.0, "input_groups": "1,2,3", "action_shape": (11,), "grid_span": 1.0 / 6.0,
          "n_a": Schedule(2.0, InverseDecay(20_000.0))},
         (*_RECIPE,
-         "q_init = 100 = 1 / (1 - gamma), above every discounted return of +1 per step; gamma 0.99",
-         "the cart position and pole angle are scaled from the environment's own ranges (the rail [-1, 1], "
-         "the ending angle +-0.2; tasks.gym_envs.KNOWN_RANGES): scaled from random actions, which see the "
-         "cart within +-0.12, the map balanced for about 52 steps (tuning seed 100, 2 trials x 40,000 steps), "
-         "with the environment's ranges 170",
-         "the input map counts the cart's position and velocity 1/32 and the pole's angular velocity 1/2 in "
-         "its distance (their scaling ranges widened 32 and 2 times about their middles; "
-         "tasks.gym_envs.WIDENED), so its 400 units resolve the pole's angle, which balancing needs first. "
-         "Tuning seeds 100-102 (5 trials x 100,000 steps, 100 greedy episodes per trial): 999, 977 and 907, "
-         "against 237, 196 and 185 with every dimension counted alike. The cart alone counted less (seeds "
-         "100-101): 1/2 262 and 477, 1/4 347 and 620, 1/8 470 and 670, 1/32 546 and 707, 1/128 573 and 854; "
-         "with the angular velocity at 1/2 too: the cart at 1/8 627 and 440, at 1/128 860, 882 and 714 (seeds "
-         "100-102); the angular velocity at 1/4 939 and 790, or counted twice 559 and 783 (the cart at 1/32)",
+         "one 20x20 input map over the pole's angle, the cart's velocity and the pole's angular velocity "
+         "(input_groups=1,2,3): the cart's position is not seen. The linear controller rounded to the preset's "
+         "torques balances all 1,000 steps without its cart-position term and fails without its cart-velocity "
+         "term (the cart runs to the rail's end), so the map spends its units on the velocity",
+         "the pole's angle is scaled from the environment's ending angle (+-0.2; tasks.gym_envs.KNOWN_RANGES), "
+         "the cart's velocity from +-7.9 m/s (its random-action range widened 4 times) and the pole's angular "
+         "velocity from twice its random-action range (tasks.gym_envs.WIDENED)",
+         "gamma 0.995 with q_init = 200 = 1 / (1 - gamma), above every discounted return of +1 per step",
          "11 torques 0.1 apart over a sixth of the torque box (-0.5 to 0.5; grid_span 1/6) with neighbourhood "
          "Q-learning over them (N_A = 2/(t/20000 + 1)): balancing needs torques near 0, and a torque's value "
-         "tells its neighbours'. With every dimension counted alike, on tuning seeds 100-102: 237, 196 and 185 "
-         "against 132, 165 and 150 with 3 torques over the whole box (-3, 0, 3) and no action neighbourhood; 21 "
-         "torques over [-1, 1] with the same neighbourhood 191 and 144 (seeds 100-101); 3 torques over a sixth "
-         "of the box 146 and 5 over a fifth 151 (seed 100, no neighbourhood); the action map learning "
-         "(lambda_A = 1/2 decaying, perturbations of 2% of the box) 112 (seed 100)",
-         "held out (seeds 0-4, 5 trials x 100,000 steps, 100 greedy episodes per trial): 654, 978, 792, 820, "
-         "610, mean 771, short of 950; 44-50 s of training per run of 5 trials on 2 busy cores. With every "
-         "dimension counted alike: 171, 196, 178, 168, 181, mean 179",
-         "where it stops short: the trials split. Over seeds 0 and 2 (10 episodes each), 5 of 10 trials earn "
-         "989-1000, 3 earn 347-786 and 2 earn 137 and 223; those balance the pole while the cart drifts to "
-         "the end of its rail, where the pole falls: in seed 0's worst trial (137) every one of 10 episodes ends with "
-         "the cart at the rail's end. The map sees the cart at 1/32, so a trial that learns to drift has "
-         "little to unlearn it by; seeing it more (1/8) costs the pole's resolution (627 and 440 above). On "
-         "tuning seeds 103-105 the preset earned 625, 998 and 647; 200,000 steps 647 and 990 (seeds 103-104), "
-         "so a drifting trial stays drifting; gamma 0.995 with q_init 200 675, 822 and 862. A seed's mean "
-         "moves by hundreds with the trial split alone: the same weighting given as bounds rounded to 4 "
-         "digits (--task-set observation_low/high) earned 720 at seed 100 against the preset's 999. Other "
-         "weightings on seeds 100-101: the cart's position at 1/8 and its velocity at 1/32 643 and 615, "
-         "the position at 1/16 704 and 902, the velocity at 1/8 873 and 672; a 30x30 map over 200,000 "
-         "steps (N_S = 2/(t/60000 + 1), alpha over 120,000) 612, 922 and 668 with the preset's weighting "
-         "and 701, 559 and 796 with the cart at 1/8 (seeds 100-102): none lifts the drifting trials. A "
-         "learning rate falling over 200,000 steps instead of 20,000, 20 trials per seed at seeds 106-108: "
-         "853, 760 and 904 against the preset's 721, 838 and 804 (sd over trials 210-290), a gain that one "
-         "seed of three contradicts; over 60,000 steps (5 trials) 979, 978, 818, 830, 853 and 767 at seeds "
-         "100-105 against 999, 977, 907, 625, 998 and 647; N_S narrowing over 5,000 steps 885 and 721 at "
-         "seeds 103 and 105 but 460 at seed 100",
-         "with every dimension counted alike, the map set the limit (somarm.reproduce.yardsticks, 100 episodes): "
-         "the linear state feedback balances all 1,000 steps and still does with its torque rounded to the "
-         "11 torques, but seen through the preset's learned map then it earned 158-189, about SOM-Q's 179, and "
-         "through maps learned on its own states 109/158 with 400 units (nearest/blended), 540/606 with 2,500 "
-         "and 783/848 with 10,000. Bigger maps did not lift SOM-Q itself (tuning seed 100): a 30x30 map 161, "
-         "a 50x50 map with Pendulum-v1's schedules over 500,000 steps 276 and over 2,000,000 steps 224, a "
-         "100x100 map over 500,000 steps 185; nor did a map settling 10 times slower (104) or a wider map "
-         "neighbourhood (175). Counting the dimensions differently did: it spends the same 400 units where "
-         "balancing needs them"),
+         "tells its neighbours'",
+         "chosen on tuning seeds 100-103; every setting tried and its score: "
+         "docs/benchmarks/invertedpendulum/TUNING.md"),
         n_trials=5)
     reacher = _benchmark(
         "reacher", "Reacher-v5",

@@ -68,8 +68,9 @@ def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
         # a frozen grid; its Q neighbourhood spreads only over InvertedPendulum's 11 close torques and
         # Reacher-v5's 3x3 grid (whose parabola needs a torque's neighbours' values)
         assert (c.n_a.value(0) > 0) == (name in ("invertedpendulum", "reacher"))
-        # the paper's one input map, except on Reacher-v5's 10 observed dimensions
-        assert c.grouped == (name == "reacher")
+        # the paper's one input map, except on Reacher-v5's 10 observed dimensions (a map per pair) and
+        # InvertedPendulum-v5 (one map over three of its four dimensions)
+        assert c.grouped == (name in ("reacher", "invertedpendulum"))
         assert c.response == "interpolated"
     # optimism: above every discounted return (Pendulum's rewards are <= 0; an InvertedPendulum step
     # earns 1, so at most 1 / (1 - 0.99) = 100); MountainCar's q_init only above the goal's value from
