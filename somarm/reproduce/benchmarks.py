@@ -22,7 +22,7 @@ from somarm.reproduce import yardsticks
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
-__all__ = ["ENVIRONMENTS", "LEARNERS", "PARTS", "TARGETS", "SPEED", "TUNING_SEEDS", "FRESH", "ReportSeeds", "budgets", "train",
+__all__ = ["ENVIRONMENTS", "LEARNERS", "BASELINES", "PARTS", "TARGETS", "SPEED", "TUNING_SEEDS", "FRESH", "ReportSeeds", "budgets", "train",
            "measure", "benchmarks", "benchmarks_pendulum",
            "benchmarks_invertedpendulum", "benchmarks_reacher", "benchmarks_mountaincar"]
 
@@ -36,6 +36,8 @@ ENVIRONMENTS: dict[str, int] = {
     "MountainCarContinuous-v0": 50_000,
 }
 LEARNERS = ("somq", "somq+", "motoric", "tabular", "td3", "sac")
+#: somarm's baselines: no target claim and no setting chosen on a seed, so they train on the peers' seeds.
+BASELINES = ("motoric", "tabular")
 #: Where a fixed grid cannot be built: Reacher-v5's 10 observation dimensions at 16 cells each make
 #: 16^10 cells (the tabular learner refuses more than 1e7 table entries).
 _NO_GRID = ("Reacher-v5",)
@@ -77,10 +79,11 @@ class ReportSeeds:
             return f"{seeds.start}" if len(seeds) == 1 else f"{seeds.start}-{seeds[-1]}"
         if self.ours == self.peers:
             return f"Seeds {span(self.ours)} for every learner; the presets were tuned on seeds 100-199."
-        return (f"somarm's learners at seeds {span(self.ours)}, which no setting was scored on before the preset "
-                f"was fixed; TD3 and SAC at seeds {span(self.peers)} (their settings, SB3's defaults or the Zoo's, "
-                "were never chosen on any seed of ours); the presets were tuned on seeds 100-199; every learner "
-                "scored on the same fresh episodes.")
+        return (f"SOM-Q and SOM-Q+ at seeds {span(self.ours)}, which no setting was scored on before the preset "
+                f"was fixed; TD3, SAC, the Motoric Map and tabular Q-learning at seeds {span(self.peers)} (no "
+                "setting of theirs was chosen on a seed of ours: the peers take SB3's defaults or the Zoo's, the "
+                "baselines make no target claim); the presets were tuned on seeds 100-199; every learner scored on "
+                "the same fresh episodes.")
 
 
 def budgets(ctx: Context, env_id: str) -> tuple[int, dict[str, int]]:
@@ -97,8 +100,8 @@ def budgets(ctx: Context, env_id: str) -> tuple[int, dict[str, int]]:
 
 def train(ctx: Context, seeds: ReportSeeds, episodes: int,
           envs: tuple[str, ...] = tuple(ENVIRONMENTS)) -> dict[str, dict]:
-    """Every learner on every environment through ``compare``: somarm's learners together on
-    ``seeds.ours``, TD3 and SAC each alone with its own budget on ``seeds.peers``
+    """Every learner on every environment through ``compare``: SOM-Q and SOM-Q+ together on ``seeds.ours``,
+    the baselines (``BASELINES``) together and TD3 and SAC each alone with its own budget on ``seeds.peers``
     (``benchmarks/<env>/<learners>/``), then all of them in ``benchmarks/<env>/compare.json`` (each
     learner with its ``seeds``) and ``compare.png``.
 
@@ -109,10 +112,11 @@ def train(ctx: Context, seeds: ReportSeeds, episodes: int,
     for env_id in envs:
         ours, peers = budgets(ctx, env_id)
         merged: dict = {}
-        ours_here = tuple(k for k in LEARNERS if k not in compare.PEERS and not (k == "tabular" and env_id in _NO_GRID))
-        groups = [(ours_here, None)] + [((k,), n) for k, n in peers.items()]
-        for learners, peer_samples in groups:
-            side = seeds.ours if peer_samples is None else seeds.peers
+        somq = tuple(k for k in LEARNERS if k not in compare.PEERS + BASELINES)
+        baselines = tuple(k for k in BASELINES if not (k == "tabular" and env_id in _NO_GRID))
+        groups = [(somq, None, seeds.ours), (baselines, None, seeds.peers)]
+        groups += [((k,), n, seeds.peers) for k, n in peers.items()]
+        for learners, peer_samples, side in groups:
             config = compare.CompareConfig(task="gym:" + env_id, learners=learners, samples=ours,
                                            peer_samples=peer_samples, seeds=len(side), seed=side.start,
                                            episodes=episodes, eval_seed=ctx.seed)

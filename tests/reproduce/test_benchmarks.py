@@ -58,11 +58,13 @@ def test_the_part_trains_each_side_on_its_own_seeds_and_scores_all_on_the_same_e
     monkeypatch.setattr(benchmarks, "compare_figure", lambda result, path: None)
     ctx = Context(out_dir=tmp_path, seed=0, progress=False)
     results = benchmarks.train(ctx, ReportSeeds(range(10, 20), range(0, 5)), 100, ("Reacher-v5",))
-    ours, *peers = calls
-    assert (ours.seed, ours.seeds, ours.eval_seed) == (10, 10, 0)
-    assert [(p.seed, p.seeds, p.eval_seed) for p in peers] == [(0, 5, 0), (0, 5, 0)]
+    ours, *rest = calls
+    assert ours.learners == ("somq", "somq+") and (ours.seed, ours.seeds, ours.eval_seed) == (10, 10, 0)
+    # the baselines (no tabular on Reacher-v5) and each peer on the peers' seeds
+    assert [p.learners for p in rest] == [("motoric",), ("td3",), ("sac",)]
+    assert [(p.seed, p.seeds, p.eval_seed) for p in rest] == [(0, 5, 0)] * 3
     merged = results["Reacher-v5"]
     assert merged["learners"]["somq"]["seeds"] == list(range(10, 20))
     assert merged["learners"]["td3"]["seeds"] == list(range(5))
-    assert benchmarks.measure(results)["Reacher-v5"]["seeds"] == {"somq": 10, "somq+": 10, "motoric": 10,
+    assert benchmarks.measure(results)["Reacher-v5"]["seeds"] == {"somq": 10, "somq+": 10, "motoric": 5,
                                                                   "td3": 5, "sac": 5}
