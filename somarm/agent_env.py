@@ -18,11 +18,12 @@ def task_name(env: Any) -> tuple[str, dict[str, Any], Any]:
     """The task name, Gymnasium keywords and environment object of ``env``: an id, ``gym:ID``, a task name
     (no object), or an environment object (trained in as given: ``GymTask``'s ``env``)."""
     from somarm import tasks
+    from somarm.tasks import gym_envs
 
     if isinstance(env, str):
-        if env.startswith("gym:") or env in tasks.names():
+        if gym_envs.env_task(env) or env in tasks.names():
             return env, {}, None
-        return "gym:" + env, {}, None
+        return gym_envs.name_of(env), {}, None
     spec = getattr(env, "spec", None)
     if spec is not None and getattr(spec, "id", None):
         # The copies made from the id (somarm evaluate, a model loaded without env) render nothing and
@@ -37,10 +38,12 @@ def task_name(env: Any) -> tuple[str, dict[str, Any], Any]:
             raise ValueError(f"{spec.id} is not a registered Gymnasium environment; SOMQ reads an environment's "
                              "spaces and keywords from the registry (gymnasium.register it, or give a registered "
                              "id)") from None
+        if gym_envs.name_of(spec.id).startswith(gym_envs.DMC_PREFIX):  # the registration's own: the suite task
+            kwargs = {k: v for k, v in kwargs.items() if k not in ("domain", "task")}
         if spec.max_episode_steps != default_limit:
             kwargs["max_episode_steps"] = spec.max_episode_steps
         check_fits(env, spec.id, kwargs)
-        return "gym:" + spec.id, kwargs, env
+        return gym_envs.name_of(spec.id), kwargs, env
     raise ValueError(f"env must be a Gymnasium id (such as 'Pendulum-v1'), a somarm task name or a registered "
                      f"Gymnasium environment, got {type(env).__name__}")
 

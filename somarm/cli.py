@@ -36,6 +36,13 @@ def _cmd_tasks(args) -> int:
         print(f"{name:16s} {tasks.record(name).summary}")
     print(f"{'gym:ID':16s} any Gymnasium environment with Box spaces, e.g. gym:Pendulum-v1 (multi-step episodes; "
           "--task-set passes gymnasium.make keywords)")
+    try:
+        from somarm.tasks import dmc
+    except ImportError:  # the suite's tasks run through Gymnasium's API (the gym extra)
+        print(f"{'dmc:DOMAIN-TASK':16s} the DeepMind Control Suite's tasks (install the gym extra to list them)")
+        return 0
+    for name in dmc.names():
+        print(f"{name:16s} dm_control suite task (multi-step episodes; --task-set time_limit=SECONDS, random=SEED)")
     return 0
 
 
@@ -89,7 +96,9 @@ def _train_into(out: Path, group, args, owner) -> int:
         trial_id = int(config.trial_ids_array()[0])
         about = [f"{config.learner} learner ({config.preset}), trial {trial_id}, seed {config.seed}"]
         try:
-            if config.task.startswith("gym:"):  # a Gymnasium MuJoCo environment: greedy episodes on a copy of it
+            from somarm.tasks.gym_envs import env_task
+
+            if env_task(config.task):  # a Gymnasium MuJoCo environment or a suite task: greedy episodes on a copy
                 from somarm.viewer import gym_view
 
                 view = LiveView(env=gym_view.environment(config.task, config.task_params),

@@ -50,13 +50,14 @@ def record(name: str) -> TaskRecord:
     Raises:
       ValueError: unknown name (the names are listed).
     """
-    if isinstance(name, str) and name.startswith("gym:"):
+    if isinstance(name, str) and name.startswith(("gym:", "dmc:")):
         from somarm.tasks import gym_envs
 
         return gym_envs.record_for(name)
     if name not in records():
-        raise ValueError(f"unknown task {name!r}; tasks: {', '.join(records())}, or gym:ID for a "
-                         "Gymnasium environment (gym:Pendulum-v1)")
+        raise ValueError(f"unknown task {name!r}; tasks: {', '.join(records())}, gym:ID for a "
+                         "Gymnasium environment (gym:Pendulum-v1) or dmc:DOMAIN-TASK for a DeepMind Control "
+                         "Suite task (dmc:reacher-easy)")
     return _RECORDS[name]
 
 

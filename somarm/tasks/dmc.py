@@ -157,6 +157,11 @@ class SuiteEnv(gymnasium.Env):
         self.episode_steps = int(round(step_limit)) if np.isfinite(step_limit) else None
 
     @property
+    def dt(self) -> float:
+        """Seconds of one step (the suite's control timestep), as Gymnasium's MuJoCo environments have it."""
+        return float(self.environment.control_timestep())
+
+    @property
     def physics(self):
         """The suite task's ``dm_control.mujoco.Physics``."""
         return self.environment.physics

@@ -49,11 +49,15 @@ from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
-__all__ = ["PREFIX", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "EVALUATION_STEPS", "KNOWN_RANGES",
+__all__ = ["PREFIX", "DMC_PREFIX", "env_task", "env_id_of", "name_of", "make_env", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "DMC_BENCHMARKS", "EVALUATION_STEPS", "KNOWN_RANGES",
            "WIDENED", "estimate_bounds"]
 
 #: What a Gymnasium task name starts with.
 PREFIX = "gym:"
+#: What a DeepMind Control Suite task name starts with (``somarm.tasks.dmc``: the suite's tasks as Gymnasium ids).
+DMC_PREFIX = "dmc:"
+#: The Gymnasium namespace of the suite's tasks (``somarm.tasks.dmc.NAMESPACE``, registered when that module loads).
+_DMC_NAMESPACE = "somarm-dmc/"
 #: Keys of ``--task-set`` that are the task's own (the rest go to ``gymnasium.make``).
 _OWN = ("observation_low", "observation_high", "evaluation_steps")
 #: Texts of ``--task-set`` that read as the float they spell (JSON knows only NaN and Infinity).
@@ -78,6 +82,10 @@ BENCHMARKS: dict[str, tuple[str, int]] = {
     "Reacher-v5": ("reacher", 200_000),
 }
 _DEFAULT_STEPS = 100_000
+
+#: The suite tasks with presets of their own and default steps (the report part ``dmc``); any other
+#: ``dmc:`` task trains with the generic ``gym`` preset for ``_DEFAULT_STEPS`` steps.
+DMC_BENCHMARKS: dict[str, tuple[str, int]] = {}
 
 #: Observation dimensions whose range the environment itself fixes though its Box is infinite, used
 #: instead of the random-action estimate: InvertedPendulum-v5's cart runs on a rail of [-1, 1] (the
@@ -131,12 +139,48 @@ class GymParams:
         return _make(self.env_id, dict(self.kwargs))
 
 
+def env_task(name: Any) -> bool:
+    """Whether task ``name`` is built on a Gymnasium environment: ``gym:ID`` or ``dmc:DOMAIN-TASK``."""
+    return isinstance(name, str) and name.startswith((PREFIX, DMC_PREFIX))
+
+
+def env_id_of(name: str) -> str:
+    """The Gymnasium id behind task ``name``: ``gym:Pendulum-v1`` -> ``Pendulum-v1``, ``dmc:reacher-easy`` ->
+    ``somarm-dmc/reacher-easy-v0``.
+
+    Raises:
+      ValueError: a ``dmc:`` name of no suite task (one line naming what there is).
+    """
+    if name.startswith(DMC_PREFIX):
+        _gymnasium()
+        from somarm.tasks import dmc
+
+        return dmc.gym_id(name)
+    return name[len(PREFIX):] if name.startswith(PREFIX) else name
+
+
+def name_of(env_id: str) -> str:
+    """The task name of Gymnasium id ``env_id``: the inverse of ``env_id_of``."""
+    if env_id.startswith(_DMC_NAMESPACE) and env_id.endswith("-v0"):
+        return DMC_PREFIX + env_id[len(_DMC_NAMESPACE):-len("-v0")]
+    return PREFIX + env_id
+
+
+def make_env(name: str, **kwargs: Any):
+    """``gymnasium.make`` of task ``name``'s environment (``gym:ID`` or ``dmc:DOMAIN-TASK``) with ``kwargs``."""
+    return _make(env_id_of(name), kwargs)
+
+
 def _make(env_id: str, kwargs: dict[str, Any]):
-    """``gymnasium.make``; this project's own ids (``somarm/Reach2-v0``) through Gymnasium's
-    ``module:id`` form, which imports the module that registers them first."""
+    """``gymnasium.make``; this project's own ids (``somarm/Reach2-v0``, the suite's ``somarm-dmc/...``)
+    through Gymnasium's ``module:id`` form, which imports the module that registers them first."""
     import gymnasium
 
-    return gymnasium.make(("somarm.peers.gym:" + env_id) if env_id.startswith("somarm/") else env_id, **kwargs)
+    if env_id.startswith("somarm/"):
+        env_id = "somarm.peers.gym:" + env_id
+    elif env_id.startswith(_DMC_NAMESPACE):
+        env_id = "somarm.tasks.dmc:" + env_id
+    return gymnasium.make(env_id, **kwargs)
 
 
 def _gymnasium():
@@ -180,7 +224,7 @@ def describe(env_id: str, kwargs_json: str = "{}") -> dict[str, Any]:
                     describe(env_id, json.dumps({key: value}))
                 except ValueError as alone:
                     raise alone from None
-        raise ValueError(failed.message(PREFIX + env_id, kwargs)) from None
+        raise ValueError(failed.message(name_of(env_id), kwargs)) from None
 
 
 class _Failed(Exception):
@@ -205,7 +249,7 @@ def _describe(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
 
     from somarm.extras import missing
 
-    name = PREFIX + env_id
+    name = name_of(env_id)
     try:
         env = _make(env_id, kwargs)
     except (error.NameNotFound, error.NamespaceNotFound, error.VersionNotFound, error.UnregisteredEnv) as exc:
@@ -245,12 +289,19 @@ def _describe(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
             "action_low": action_low,
             "action_high": action_high,
             "action_dtype": np.dtype(env.action_space.dtype),
-            "max_episode_steps": env.spec.max_episode_steps if env.spec is not None else None,
+            "max_episode_steps": _episode_steps(env),
             "mujoco": hasattr(env.unwrapped, "model") and type(env.unwrapped.model).__name__ == "MjModel",
         }
     finally:
         with contextlib.suppress(Exception):  # a copy that failed may fail to close as well
             env.close()
+
+
+def _episode_steps(env) -> int | None:
+    """Steps of one whole episode: the TimeLimit's where ``gymnasium.make`` gave one, else the environment's
+    own (a suite task ends its episodes itself: ``SuiteEnv.episode_steps``), else None."""
+    limit = env.spec.max_episode_steps if env.spec is not None else None
+    return limit if limit is not None else getattr(env.unwrapped, "episode_steps", None)
 
 
 def _first_step(env, action: np.ndarray) -> None:
@@ -315,7 +366,7 @@ def _check_bounds(params: GymParams, size: int) -> None:
         return
     low, high = (np.asarray(v, dtype=np.float64) for v in given)
     if low.shape != (size,) or high.shape != (size,):
-        raise ValueError(f"observation_low and observation_high of {PREFIX}{params.env_id} are lists of "
+        raise ValueError(f"observation_low and observation_high of {name_of(params.env_id)} are lists of "
                          f"{size} numbers, got {low.shape[0] if low.ndim else 1} and {high.shape[0] if high.ndim else 1}")
     if not (np.isfinite(low).all() and np.isfinite(high).all() and (high > low).all()):
         raise ValueError("observation_low and observation_high must be finite with high > low in every dimension")
@@ -349,7 +400,7 @@ def estimate_bounds(params: GymParams, seed: int, *, env: Any = None) -> tuple[t
         unbounded = [int(k) for k in np.flatnonzero(~np.isfinite(facts["observation_low"])
                                                     | ~np.isfinite(facts["observation_high"]))]
         bad = [int(k) for k in np.flatnonzero(~np.isfinite(seen).all(axis=0))]
-        raise ValueError(f"{PREFIX}{params.env_id}'s observation Box is infinite in dimension(s) {unbounded}, so "
+        raise ValueError(f"{name_of(params.env_id)}'s observation Box is infinite in dimension(s) {unbounded}, so "
                          "somarm estimates its scaling from observations under random actions, but the "
                          f"environment gave non-finite observations (nan or inf) in dimension(s) {bad}; give "
                          "observation_low and observation_high")
@@ -383,9 +434,9 @@ class GymTask(TaskBase):
     def __init__(self, params: GymParams, *, n_trials: int = 1, seed: int = 0,
                  trial_ids: np.ndarray | None = None, backend: str = "gymnasium", env: Any = None):
         if backend != "gymnasium":
-            raise ValueError(f"{PREFIX}{params.env_id} runs in gymnasium (its own step), got backend {backend!r}")
+            raise ValueError(f"{name_of(params.env_id)} runs in gymnasium (its own step), got backend {backend!r}")
         facts = describe(params.env_id, _kwargs_json(params))
-        self.name = PREFIX + params.env_id
+        self.name = name_of(params.env_id)
         self.params, self.backend, self.seed = params, backend, seed
         self.trial_ids = trial_ids_for(n_trials, trial_ids)
         self.n_trials = int(self.trial_ids.size)
@@ -594,7 +645,7 @@ class GymRecord(TaskRecord):
 
     @property
     def params_env_id(self) -> str:
-        return self.name[len(PREFIX):]
+        return env_id_of(self.name)
 
     def check_settable(self, given: dict[str, Any]) -> None:
         """Every key is settable: it is a keyword of ``gymnasium.make`` or one of the task's own."""
@@ -620,21 +671,21 @@ class GymRecord(TaskRecord):
 
 @functools.lru_cache(maxsize=64)
 def record_for(name: str) -> GymRecord:
-    """The record of task ``gym:ID`` (the spaces are read once, by making the environment).
+    """The record of task ``gym:ID`` or ``dmc:DOMAIN-TASK`` (the spaces are read once, by making the environment).
 
     Raises:
-      ValueError: as ``describe``.
+      ValueError: as ``describe``; an unknown suite domain or task (one line naming what there is).
     """
-    env_id = name[len(PREFIX):]
-    if not env_id:
+    if name.startswith(PREFIX) and not name[len(PREFIX):]:
         raise ValueError(f"{name!r} names no environment; give gym:ID, such as gym:Pendulum-v1")
+    env_id = env_id_of(name)
     facts = describe(env_id)
-    preset, n_steps = BENCHMARKS.get(env_id, ("gym", _DEFAULT_STEPS))
+    preset, n_steps = BENCHMARKS.get(env_id) or DMC_BENCHMARKS.get(name) or ("gym", _DEFAULT_STEPS)
     obs_dim, action_dim = facts["observation_low"].size, facts["action_low"].size
+    what = f"dm_control's suite task {name[len(DMC_PREFIX):]}" if name.startswith(DMC_PREFIX) else f"Gymnasium's {env_id}"
     return GymRecord(
         name=name,
-        summary=f"Gymnasium's {env_id}: obs {obs_dim} (scaled to [0, 1]), action {action_dim}, "
-                "multi-step episodes",
+        summary=f"{what}: obs {obs_dim} (scaled to [0, 1]), action {action_dim}, multi-step episodes",
         params=GymParams,
         settable=(),
         make=lambda params, **kwargs: GymTask(params, **kwargs),
@@ -652,5 +703,7 @@ def record_for(name: str) -> GymRecord:
 
 def _no_dm_env(name: str):
     def environment(batched):
+        if name.startswith(DMC_PREFIX):
+            raise ValueError(f"{name} is a suite task already: use dm_control.suite.load, not tasks.load")
         raise ValueError(f"{name} is a Gymnasium environment already: use gymnasium.make, not tasks.load")
     return environment

@@ -75,7 +75,9 @@ def main(argv: list[str] | None = None) -> int:
         from somarm.run.config import parse_assignments
 
         task_set = tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set"))
-        if args.task.startswith("gym:"):  # a Gymnasium MuJoCo environment: its own model, greedy episodes
+        from somarm.tasks.gym_envs import env_task
+
+        if env_task(args.task):  # a Gymnasium MuJoCo environment or a suite task: its own model, greedy episodes
             return _view_gym(args, task_set)
         session = sessions.load_session(args.task, run=args.run, n_goals=args.goals, seed=args.seed,
                                         trial=args.trial, task_set=task_set)
@@ -95,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _view_gym(args, task_set) -> int:
-    """``somarm view gym:ID``: ``--goals`` episodes of the run's greedy policy (or random actions)."""
+    """``somarm view gym:ID`` (or ``dmc:DOMAIN-TASK``): ``--goals`` episodes of the run's greedy policy (or random actions)."""
     from somarm.viewer import gym_view
 
     try:

@@ -1,7 +1,8 @@
-"""Gymnasium MuJoCo environments (``gym:ID`` tasks) in the viewer: ``somarm view gym:ID`` and ``train --view``.
+"""Gymnasium MuJoCo environments (``gym:ID`` tasks) and the suite's tasks (``dmc:DOMAIN-TASK``) in the viewer:
+``somarm view gym:ID`` and ``train --view``.
 
-A ``gym:ID`` task has no MJCF file of this project's: its model is the environment's own
-(``env.unwrapped.model``), drawn by ``somarm.viewer.model_view``. The learner acts on the task's
+Such a task has no MJCF file of this project's: its model is the environment's own
+(``env.unwrapped.model``; a suite task's is its physics' ``MjModel``), drawn by ``somarm.viewer.model_view``. The learner acts on the task's
 scaled observations, so the policy here scales each raw observation as the task does and answers
 with the greedy action of one trial.
 """
@@ -17,7 +18,8 @@ __all__ = ["environment", "one_step_policy", "view"]
 
 
 def environment(task_name: str, task_params: dict[str, Any]):
-    """A fresh copy of ``task_name``'s environment (``gym:ID`` with its ``gymnasium.make`` keywords).
+    """A fresh copy of ``task_name``'s environment (``gym:ID`` with its ``gymnasium.make`` keywords, or
+    ``dmc:DOMAIN-TASK`` with the suite task's).
 
     Raises:
       ValueError: not a MuJoCo environment, so there is no model to draw (one line).
@@ -82,7 +84,8 @@ def view(task_name: str, *, run=None, trial: int | None = None, task_set: dict[s
                  f"{learner.t:,} steps learned; greedy"]
     env = environment(task_name, params)
     try:
-        longest = env.spec.max_episode_steps if env.spec is not None and env.spec.max_episode_steps else 1000
+        longest = (env.spec.max_episode_steps if env.spec is not None else None) or \
+            getattr(env.unwrapped, "episode_steps", None) or 1000
         states = rollout(env, policy, n_steps=min(3000, episodes * longest), seed=seed)
         base = env.unwrapped
         return view_states(base.model, states.qpos, timestep=states.timestep, title=task_name, lines=lines,
