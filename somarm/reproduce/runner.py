@@ -17,6 +17,7 @@ from somarm.reproduce import (
     benchmarks,
     beyond,
     delayed,
+    dmc,
     driven,
     four_goals,
     more_inputs,
@@ -52,10 +53,10 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
 #: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
 OPTIONAL: dict[str, Callable[[Context], Section]] = {
     "delayed_reward": delayed.delayed_reward, "peers": peers.peers, "benchmarks": benchmarks.benchmarks,
-    **benchmarks.PARTS,
+    **benchmarks.PARTS, **dmc.PARTS,
 }
 #: The parts that run Gymnasium's environments (the whole benchmarks part and each environment alone).
-GYMNASIUM_PARTS = frozenset({"benchmarks", *benchmarks.PARTS})
+GYMNASIUM_PARTS = frozenset({"benchmarks", *benchmarks.PARTS, *dmc.PARTS})
 
 
 def check_names(only: list[str] | None) -> list[str]:

@@ -1,0 +1,75 @@
+"""The report part ``dmc``: which learner trains on which seeds, the target claims, and a quick run end to end."""
+
+import pytest
+
+from somarm.peers import compare
+from somarm.reproduce import dmc
+from somarm.reproduce.benchmarks import ReportSeeds
+from somarm.reproduce.common import Context
+
+
+def _fake_compare(calls):
+    def fake(config, out, *, progress, resume):
+        calls.append(config)
+        out.mkdir(parents=True, exist_ok=True)
+        seeds = list(range(config.seed, config.seed + config.seeds))
+        return {"task": config.task, "seeds": seeds, "task_params": {}, "random_action_return": 3.0,
+                "learners": {k: {"samples": [100], "return": [[500.0] * len(seeds)], "wall_seconds": [[1.0] * len(seeds)],
+                                 "seconds_per_sample": [0.01] * len(seeds), "settings": {}} for k in config.learners}}
+    return fake
+
+
+@pytest.fixture
+def faked(tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(compare, "compare", _fake_compare(calls))
+    monkeypatch.setattr(dmc, "compare_figure", lambda result, path: None)
+    return calls, Context(out_dir=tmp_path, seed=0, progress=False)
+
+
+def test_somarms_learners_train_on_the_fresh_seeds_and_each_peer_alone_on_its_own(faked):
+    calls, ctx = faked
+    results = dmc.train(ctx, dmc.SEEDS, 100, ("dmc:cartpole-balance",))
+    assert [c.learners for c in calls] == [("somq", "somq+"), ("td3",), ("sac",)]
+    assert [(c.seed, c.seeds) for c in calls] == [(10, 5), (0, 5), (0, 5)]
+    assert all(c.task == "dmc:cartpole-balance" and c.eval_seed == 0 for c in calls)
+    assert calls[1].peer_samples == dmc.PEER_SAMPLES and calls[0].peer_samples is None
+    merged = results["dmc:cartpole-balance"]
+    assert merged["learners"]["somq"]["seeds"] == list(range(10, 15))
+    assert merged["learners"]["sac"]["seeds"] == list(range(5))
+
+
+def test_recorded_peers_are_read_at_their_recorded_seeds_and_none_is_trained(faked):
+    calls, ctx = faked
+    seeds = ctx.out_dir / "dmc" / "cartpole-balance" / "sac" / "seeds"
+    seeds.mkdir(parents=True)
+    for seed in (0, 1, 3):  # seed 2 is missing: the recorded seeds stop at 1
+        (seeds / f"sac-{seed}.json").write_text("{}")
+    results = dmc.train(ctx, dmc.SEEDS, 100, ("dmc:cartpole-balance",), peers_recorded=True)
+    assert [(c.learners, c.seed, c.seeds) for c in calls] == [(("somq", "somq+"), 10, 5), (("sac",), 0, 2)]
+    m = dmc.measure(results)["dmc:cartpole-balance"]
+    assert m["seeds"]["sac"] == [0, 1] and "td3" not in m["seeds"]
+    assert any("SB3 TD3 at 0 of 5 seeds" in line for line in dmc._missing({"dmc:cartpole-balance": m}, dmc.SEEDS))
+
+
+def _measured(somq, sac):
+    final = {"somq": (somq, 5.0), "somq+": (somq, 5.0)}
+    seeds = {"somq": list(range(10, 15)), "somq+": list(range(10, 15))}
+    if sac is not None:
+        final["sac"], seeds["sac"] = (sac, 2.0), [0, 1]
+    return {task: {"final": final, "seeds": seeds, "sac": sac, "random": 1.0} for task in dmc.TARGET_TASKS}
+
+
+@pytest.mark.parametrize("somq, sac, holds", [(950.0, 1000.0, True), (899.0, 1000.0, False), (900.0, 1000.0, True),
+                                               (500.0, None, None)])
+def test_the_target_is_90_percent_of_sacs_final_return_and_undecided_without_sac(somq, sac, holds):
+    claims = dmc._claims(_measured(somq, sac))
+    assert len(claims) == 2 * len(dmc.TARGET_TASKS)
+    assert all(c.holds is holds for c in claims)
+    if sac is None:
+        assert "no SAC seed is recorded" in claims[0].measured
+
+
+def test_report_seeds_of_the_part_are_fresh():
+    assert not set(dmc.SEEDS.ours) & set(range(100, 200)) and not set(dmc.SEEDS.peers) & set(range(100, 200))
+    assert isinstance(dmc.SEEDS, ReportSeeds)
