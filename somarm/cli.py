@@ -36,13 +36,10 @@ def _cmd_tasks(args) -> int:
         print(f"{name:16s} {tasks.record(name).summary}")
     print(f"{'gym:ID':16s} any Gymnasium environment with Box spaces, e.g. gym:Pendulum-v1 (multi-step episodes; "
           "--task-set passes gymnasium.make keywords)")
-    try:
-        from somarm.tasks import dmc
-    except ImportError:  # the suite's tasks run through Gymnasium's API (the gym extra)
-        print(f"{'dmc:DOMAIN-TASK':16s} the DeepMind Control Suite's tasks (install the gym extra to list them)")
-        return 0
-    for name in dmc.names():
-        print(f"{name:16s} dm_control suite task (multi-step episodes; --task-set time_limit=SECONDS, random=SEED)")
+    from somarm.tasks.gym_envs import suite_names
+
+    for name in suite_names():  # they run through Gymnasium's API (the gym extra)
+        print(f"{name:16s} dm_control suite task (gym extra; multi-step episodes; --task-set time_limit=SECONDS, random=SEED)")
     return 0
 
 
@@ -120,27 +117,36 @@ def _train_into(out: Path, group, args, owner) -> int:
         if view is not None:
             view.close()
         raise
+    from somarm.run.folder import write_summary
+
+    extra: dict = {}
     try:
         # A second Ctrl-C or SIGTERM waits until the run is written (it then still ends the command).
         with signals_deferred():
             if view is not None:
                 view.finish(result.steps_done)  # the page says so and shows the final policy
-            extra = run.greedy_summary(result)  # the run is written whatever happens here
-            if "greedy_error" in extra:
-                print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
-            run.write_claimed(result, owner, figures=not args.no_figures, extra_summary=extra)
+            # The trained run first (learner, config, curves, the training's summary), so that even a SIGKILL
+            # in the greedy evaluation keeps it; then the evaluation, and the summary again with it.
+            kept = not (result.interrupted and owner.replacing)  # an interrupted run does not replace an earlier one
+            run.write_claimed(result, owner, figures=not args.no_figures)
+            if kept:
+                extra = run.greedy_summary(result)  # a failed or cut evaluation is said in extra
+                if "greedy_error" in extra:
+                    print(f"somarm: warning: greedy evaluation failed: {extra['greedy_error']}", file=sys.stderr)
+                write_summary(result, owner.folder, extra)
     except KeyboardInterrupt:
         if view is not None:
             view.close()
-        print(f"interrupted after step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
+        print(f"interrupted after step {result.steps_done}: {_what_was_kept(result, owner, out, extra)}",
+              file=sys.stderr)
         return 130
     if result.interrupted:
         if view is not None:
             view.close()
-        print(f"interrupted at step {result.steps_done}: {_what_was_kept(result, owner, out)}", file=sys.stderr)
+        print(f"interrupted at step {result.steps_done}: {_what_was_kept(result, owner, out, extra)}", file=sys.stderr)
         return 130
     if "greedy_mean_return" in extra:  # an episodic task: whole greedy episodes, not one step
-        greedy = f"greedy mean return {extra['greedy_mean_return']:+.4f}"
+        greedy = f"greedy mean return {extra['greedy_mean_return']:+.4f}{_cut_note(extra, config.n_trials)}"
     else:
         greedy = f"greedy mean reward {extra.get('greedy_mean_reward', float('nan')):+.4f}"
     print(f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
@@ -166,7 +172,18 @@ def _keep_viewing(view) -> None:
         view.close()
 
 
-def _what_was_kept(result, owner, out: Path) -> str:
+def _cut_note(summary: dict, n_trials: int) -> str:
+    """`` (200 of 200 episodes cut at 1,000 steps: ...)`` where the greedy episodes' cap cut some, else ``""``."""
+    cut = summary.get("greedy_episodes_cut")
+    if not cut:
+        return ""
+    return (f" ({cut} of {summary['greedy_episodes'] * n_trials} episodes cut at {summary['greedy_episode_cap']:,} "
+            "steps: --task-set evaluation_steps=N)")
+
+
+def _what_was_kept(result, owner, out: Path, extra: dict | None = None) -> str:
+    if (extra or {}).get("greedy_cut"):
+        return f"the trained run is written to {out} without its greedy evaluation (somarm evaluate scores it)"
     if owner.replacing:
         return f"the earlier run in {out} is kept (an interrupted run does not replace it)"
     return f"partial results written to {out}"
@@ -190,7 +207,7 @@ def _cmd_evaluate(args) -> int:
         shortest = (f"; the shortest paths {greedy['shortest_mean_episode_length']:.2f}"
                     if "shortest_mean_episode_length" in greedy else "")
         print(
-            f"{name}: greedy mean return {greedy['greedy_mean_return']:+.4f} (sd "
+            f"{name}: greedy mean return {greedy['greedy_mean_return']:+.4f}{_cut_note(greedy, learner.n_trials)} (sd "
             f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); {success}mean episode length "
             f"{greedy['greedy_mean_episode_length']:.2f} steps (a failed episode counts at the step limit{shortest}); "
             f"{greedy['greedy_episodes']} greedy episodes per trial, seed {seed}"

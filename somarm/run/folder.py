@@ -20,7 +20,7 @@ from somarm.run.config import RunConfig
 from somarm.run.group import RunResult
 from somarm.run.summary import summary
 
-__all__ = ["write", "write_claimed", "load", "task_for"]
+__all__ = ["write", "write_claimed", "write_summary", "load", "task_for"]
 
 
 def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
@@ -86,6 +86,18 @@ def write_claimed(result: RunResult, owner: FolderClaim, **kwargs: Any) -> None:
             raise ValueError(f"{exc}; the new run was dropped and the earlier run in {owner.folder} is kept") from None
         raise
     owner.finish(not result.interrupted)
+
+
+def write_summary(result: RunResult, out_dir: str | Path, extra_summary: dict[str, Any] | None = None) -> Path:
+    """Write (atomically) a written run's ``summary.json`` again with ``extra_summary``: its greedy
+    evaluation, measured after the trained run was written (``write_claimed``).
+
+    Raises:
+      ValueError: the file cannot be written (one line; the run's other files are kept).
+    """
+    path = Path(out_dir) / "summary.json"
+    atomic_write_json(path, summary(result, extra_summary))
+    return path
 
 
 def _episode_arrays(result: RunResult) -> dict[str, np.ndarray]:

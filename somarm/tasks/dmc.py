@@ -47,12 +47,14 @@ def _bounded(spec) -> bool:
 
 
 def names() -> tuple[str, ...]:
-    """Every suite task, as ``dmc:DOMAIN-TASK``, in the suite's order.
+    """Every suite task, as ``dmc:DOMAIN-TASK``, in the suite's order (``gym_envs.suite_names``).
 
     Listed without building them (building all takes seconds): every suite task's action spec is
     bounded (a test opens each), and ``SuiteEnv`` refuses one that is not, should the suite add it.
     """
-    return tuple(f"{PREFIX}{domain}-{task}" for domain, task in _suite_tasks())
+    from somarm.tasks.gym_envs import suite_names
+
+    return suite_names()
 
 
 def split_name(name: str) -> tuple[str, str]:

@@ -49,7 +49,7 @@ from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
-__all__ = ["PREFIX", "DMC_PREFIX", "env_task", "env_id_of", "name_of", "make_env", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "DMC_BENCHMARKS", "EVALUATION_STEPS", "KNOWN_RANGES",
+__all__ = ["PREFIX", "DMC_PREFIX", "env_task", "suite_names", "env_id_of", "name_of", "make_env", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "DMC_BENCHMARKS", "EVALUATION_STEPS", "KNOWN_RANGES",
            "WIDENED", "estimate_bounds"]
 
 #: What a Gymnasium task name starts with.
@@ -142,6 +142,14 @@ class GymParams:
 def env_task(name: Any) -> bool:
     """Whether task ``name`` is built on a Gymnasium environment: ``gym:ID`` or ``dmc:DOMAIN-TASK``."""
     return isinstance(name, str) and name.startswith((PREFIX, DMC_PREFIX))
+
+
+def suite_names() -> tuple[str, ...]:
+    """Every DeepMind Control Suite task as ``dmc:DOMAIN-TASK``, in the suite's order (dm_control alone is
+    imported: ``somarm tasks`` lists them without Gymnasium)."""
+    from dm_control import suite
+
+    return tuple(f"{DMC_PREFIX}{domain}-{task}" for domain, task in suite.ALL_TASKS)
 
 
 def env_id_of(name: str) -> str:
