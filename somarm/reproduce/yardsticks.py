@@ -129,21 +129,31 @@ def controller_map(env_id: str, policy: Policy, task, shape: tuple[int, ...], st
     return units
 
 
-def through_map(policy: Policy, task, units: np.ndarray, n_basis: int = 1) -> Policy:
+def through_map(policy: Policy, task, units: np.ndarray, n_basis: int = 1, dims=None) -> Policy:
     """``policy`` answering for the input units nearest the observation instead of the observation.
 
     With ``n_basis = 1`` the nearest unit's place alone (the winner response's view of the state);
     with more, a blend of the policy at the ``n_basis`` nearest units with the interpolated
     response's tapered inverse-distance weights ``1/d_i - 1/d_(n_basis+1)``
-    (``somarm.learners.interpolation``), so the blend moves continuously between units.
+    (``somarm.learners.interpolation``), so the blend moves continuously between units. ``dims``: the
+    observed dimensions a map over some of them sees (``units (n, len(dims))``); the others pass as
+    observed (default: every dimension).
     """
+    def place(x: np.ndarray, unit: int) -> np.ndarray:
+        if dims is None:
+            return task.unscale(units[unit])
+        x = x.copy()
+        x[dims] = units[unit]
+        return task.unscale(x)
+
     def seen(obs: np.ndarray) -> np.ndarray:
-        distances = np.sqrt(((units - task.scale(obs)) ** 2).sum(axis=1))
+        x = task.scale(obs)
+        distances = np.sqrt(((units - (x if dims is None else x[dims])) ** 2).sum(axis=1))
         order = np.argsort(distances, kind="stable")[: n_basis + 1]
         if n_basis == 1 or distances[order[0]] == 0.0:
-            return policy(task.unscale(units[order[0]]))
+            return policy(place(x, order[0]))
         weights = 1.0 / distances[order[:n_basis]] - 1.0 / distances[order[n_basis]]
-        answers = np.array([policy(task.unscale(units[i])) for i in order[:n_basis]])
+        answers = np.array([policy(place(x, i)) for i in order[:n_basis]])
         return weights @ answers / weights.sum()
     return seen
 
@@ -233,23 +243,32 @@ def _map_rows(env_id: str, policy: Policy, map_steps: int | None, seed: int,
     rounded to each of ``roundings`` (label, levels) first: the interpolated response's form when
     every unit holds one torque of a grid."""
     from somarm.learners import presets
+    from somarm.learners.groups import parse_groups
     from somarm.learners.interpolation import n_basis_for
     from somarm.tasks import gym_envs
 
     preset, steps = gym_envs.BENCHMARKS[env_id]
     map_steps = steps if map_steps is None else map_steps
     config = presets.get(preset)
-    if map_steps <= 0 or config.grouped:  # several maps: no one unit to see the state through
+    dims = None
+    if config.grouped:  # one map over some of the dimensions is seen through; several maps are not
+        groups = parse_groups(config.input_groups, gym_envs.describe(env_id)["observation_low"].size)
+        if len(groups) > 1 or config.k_nearest != 1 or config.grow_every:
+            return []
+        dims = np.array(groups[0])
+    if map_steps <= 0:
         return []
     task, units = learned_map(env_id, map_steps, seed)
     shape = "x".join(str(n) for n in config.input_shape)
     n_basis = n_basis_for(config.input_shape)
     where = f"the preset's {shape} input map after {map_steps:,} steps"
+    if dims is not None:
+        where += f" (over dimensions {', '.join(map(str, dims))}; the others as observed)"
     blended = f"state seen through {where}: blended over its {n_basis} nearest units"
-    return [(f"state seen through {where}: its nearest unit", through_map(policy, task, units)),
-            (blended, through_map(policy, task, units, n_basis))] + [
-            (f"{blended}, each unit's torque rounded to {label}", through_map(round_to(policy, levels), task, units,
-                                                                               n_basis))
+    return [(f"state seen through {where}: its nearest unit", through_map(policy, task, units, dims=dims)),
+            (blended, through_map(policy, task, units, n_basis, dims))] + [
+            (f"{blended}, each unit's torque rounded to {label}",
+             through_map(round_to(policy, levels), task, units, n_basis, dims))
             for label, levels in roundings]
 
 

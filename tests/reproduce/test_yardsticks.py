@@ -21,3 +21,12 @@ def test_a_representation_learns_to_hold_the_pd_law_on_its_own_states(changes):
     agree = np.mean([np.mean(policy(o) == rounded(t)) for o, t in zip(raw, torques[-1000:], strict=True)])
     # A random grid torque agrees on a joint 1 time in 3; the learned table is measurably better.
     assert agree > 0.38, agree
+
+
+def test_a_map_over_some_dimensions_is_seen_through_and_the_others_pass_as_observed():
+    scaling = gym_envs.BoxScaling(np.zeros(3), np.full(3, 2.0))
+    units = np.array([[0.25], [0.75]])  # over dimension 1 alone, in scaled units
+    seen = yardsticks.through_map(lambda obs: obs.copy(), scaling, units, dims=np.array([1]))
+    np.testing.assert_allclose(seen(np.array([0.3, 1.9, 1.2])), [0.3, 1.5, 1.2])
+    np.testing.assert_allclose(yardsticks.through_map(lambda obs: obs.copy(), scaling, np.array([[0.5, 0.5, 0.5]]))(
+        np.array([0.3, 1.9, 1.2])), [1.0, 1.0, 1.0])
