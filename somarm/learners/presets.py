@@ -487,6 +487,20 @@ def _benchmarks() -> tuple[Preset, ...]:
          "chosen on tuning seeds 100-103; every setting tried and its score: "
          "docs/benchmarks/invertedpendulum/TUNING.md"),
         n_trials=5)
+    # The DeepMind Control Suite's report tasks (``tasks.gym_envs``' DMC_BENCHMARKS); every value this
+    # project's, chosen on tuning seeds (docs/benchmarks/dmc/TUNING.md holds every setting tried).
+    suite_choices = ("every value is this project's: the paper ran no suite task; chosen on tuning seeds (100-199), "
+                     "every setting tried in docs/benchmarks/dmc/TUNING.md; the report scores fresh seeds",)
+    dmc = Preset(
+        "dmc", "beyond the paper: the DeepMind Control Suite's one-torque tasks (dmc:cartpole-*, dmc:pendulum-swingup)",
+        dataclasses.replace(invertedpendulum.config, input_groups="all"),
+        "dmc:cartpole-balance", "none (the report's dmc part)", 5, None,
+        choices=(*suite_choices, "the invertedpendulum preset's recipe with one 20x20 map over every observed dimension"))
+    dmc_2d = Preset(
+        "dmc_2d", "beyond the paper: the DeepMind Control Suite's two-force tasks (dmc:reacher-*, dmc:point_mass-easy)",
+        dataclasses.replace(invertedpendulum.config, input_groups="all", action_shape=(3, 3), grid_span=1.0),
+        "dmc:reacher-easy", "none (the report's dmc part)", 5, None,
+        choices=(*suite_choices, "the dmc preset with a 3x3 grid of forces over the whole action box (grid_span 1)"))
     reacher = _benchmark(
         "reacher", "Reacher-v5",
         {"gamma": 0.95, "action_shape": (3, 3), "grid_span": 0.1, "input_groups": "pairs",
@@ -512,7 +526,7 @@ def _benchmarks() -> tuple[Preset, ...]:
          "0-4). Where it stops: the PD law held through these same maps on its own states earns about -7 "
          "(the yardsticks), so the representation stops short of -6 before any learning"),
         n_trials=5, reported="seeds 10-19")
-    return generic, pendulum, mountaincar, invertedpendulum, reacher
+    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, dmc_2d
 
 
 PRESETS: dict[str, Preset] = {

@@ -10,10 +10,11 @@ from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table2+", "table5+"]
 BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
+SUITE = ["dmc", "dmc_2d"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
-    assert list(presets.PRESETS) == [*NAMES, "obstacle", *BENCHMARKS]
+    assert list(presets.PRESETS) == [*NAMES, "obstacle", *BENCHMARKS, *SUITE]
     for name in NAMES:
         assert isinstance(presets.get(name), SOMQConfig)
         line = presets.describe(name)
@@ -162,3 +163,15 @@ def test_presets_build_learners():
             actions = learner.act(np.full((2, 2), 0.5))
             learner.learn(-actions.sum(axis=1))
             assert learner.t == 1
+
+
+def test_the_suite_presets_are_the_invertedpendulum_recipe_with_one_map_over_every_dimension():
+    base = presets.get("invertedpendulum")
+    for name, actions in (("dmc", base.action_shape), ("dmc_2d", (3, 3))):
+        preset = presets.PRESETS[name]
+        assert preset.task.startswith("dmc:") and presets.describe(name).startswith("beyond the paper")
+        config = preset.config
+        assert config.input_groups == "all" and not config.grouped and config.action_shape == actions
+        assert (config.gamma, config.q_init, config.alpha) == (base.gamma, base.q_init, base.alpha)
+    assert presets.get("dmc_2d").grid_span == 1.0
+
