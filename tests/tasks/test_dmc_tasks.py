@@ -174,3 +174,14 @@ def test_the_viewer_follows_a_trained_run(tmp_path):
     page = tmp_path / "view.html"
     gym_view.view("dmc:reacher-easy", run=tmp_path / "run", episodes=1, html=page, log=lambda line: None)
     assert page.exists()
+
+
+def test_the_report_tasks_train_with_their_own_presets_and_others_with_the_generic_one():
+    from somarm.learners import presets
+
+    for name, (preset, steps) in gym_envs.DMC_BENCHMARKS.items():
+        record = tasks.record(name)
+        assert (record.preset, record.n_steps) == (preset, steps) and preset in presets.PRESETS
+        width = tasks.make(name, **record.complete(dict(SHORT), seed=0)).action_low.size
+        assert presets.get(preset).action_shape == ((11,) if width == 1 else (3, 3))
+    assert tasks.record("dmc:acrobot-swingup").preset == "gym"
