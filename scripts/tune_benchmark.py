@@ -14,8 +14,16 @@ import argparse
 import json
 import time
 
+from somarm import tasks
 from somarm.learners import make, presets
-from somarm.peers import compare
+from somarm.run.evaluation import evaluation_rng
+
+
+def _train(task, learner, steps: int) -> None:
+    """``steps`` steps of one trial on an episodic task (as ``somarm compare`` trains)."""
+    for _ in range(steps):
+        actions = learner.act(task.reset())
+        learner.learn(task.step(actions), task.next_observations, task.terminal)
 
 
 def main() -> None:
@@ -28,29 +36,31 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--response", default=None, help="winner or interpolated (default: the preset's)")
     args = parser.parse_args()
-    preset, steps = compare.task_defaults(args.task)
-    samples = args.samples or steps
+    record = tasks.record(args.task)
+    samples = args.samples or record.n_steps
     rungs = sorted({int(r) for r in args.rungs.split(",") if r} | {samples})
     overrides = dict(item.split("=", 1) for item in args.set)
     if args.response:
         overrides["response"] = args.response
-    settings = presets.get(preset).with_overrides(overrides)
+    settings = presets.get(record.preset).with_overrides(overrides)
     for seed in (int(s) for s in args.seeds.split(",")):
-        if seed < 100:
+        if not 100 <= seed <= 199:
             raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
-        config = compare.CompareConfig(task=args.task, learners=("somq",), samples=samples, seeds=1, seed=seed,
-                                       episodes=args.episodes, eval_seed=seed)
-        params = compare._params(config)
-        task = compare._task(config, seed, params)
-        score = compare._Scorer(config, params)
-        learner = make("somq", settings, **compare._bounds(task), seed=seed)
+        # The observation scaling estimated at the seed, the task of the seed, fresh episodes of the seed.
+        params = record.complete(tasks.check_params(args.task, {}), seed)
+        task, judge = tasks.make(args.task, seed=seed, **params), tasks.make(args.task, seed=seed, **params)
+        starts = judge.sample_starts(evaluation_rng(seed), args.episodes)
+        learner = make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
+                       action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic,
+                       seed=seed)
         done, wall, scores = 0, 0.0, {}
         for rung in rungs:
             start = time.perf_counter()
-            compare._train_ours(task, learner, rung - done)
+            _train(task, learner, rung - done)
             wall += time.perf_counter() - start
             done = rung
-            scores[rung] = (round(score(lambda x, model=learner: model.predict(x[None])[0]), 2), round(wall, 1))
+            returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
+            scores[rung] = (round(float(returns.mean()), 2), round(wall, 1))
         print(json.dumps({"seed": seed, "set": overrides, "scores": scores}), flush=True)
 
 
