@@ -3,7 +3,7 @@
 The paper's SOM-Q has one input map over every observed dimension, and one winning unit names the
 state. That map's units must cover the joint space of all the dimensions that vary on their own, so
 past four or so of them a map of any size resolves each coarsely. Here the state is seen instead by
-G maps, one per group of dimensions (``input_groups``), as tile coding sees it through several
+G maps, one per group of dimensions (``input_groups``, read by ``somarm.learners.grouping``), as tile coding sees it through several
 tilings, and each map answers with a blend of its k nearest units (``k_nearest``):
 
 - features: in map g the ``k`` units nearest the group's part of the observation ``x_g`` get the
@@ -35,88 +35,13 @@ so the sum starts at ``q_init``. Random numbers: the paper's row per step per tr
 
 from __future__ import annotations
 
-import itertools
-
 import numba
 import numpy as np
 
 from somarm.learners._kernels import _pull, _pull_action, neighbourhood_row, perturbation, wrapped
 from somarm.learners.growing import grid_row, grow
 
-__all__ = ["GROUPINGS", "check_groups", "parse_groups", "group_table", "features", "act_kernel", "learn_kernel",
-           "predict_kernel", "greedy_kernel"]
-
-#: The named groupings of ``input_groups`` (besides index lists and ``chunks:K``).
-GROUPINGS = ("all", "pairs", "triples", "singles")
-
-
-def check_groups(text: str) -> str:
-    """``input_groups`` checked for form, before the observation's size is known.
-
-    Raises:
-      ValueError: one line naming the forms allowed.
-    """
-    allowed = ("input_groups must be all, pairs, triples, singles, chunks:K (K >= 1) or index lists such as "
-               f"'0,1;2,3' (0-based, ';' between maps), got {text!r}")
-    if not isinstance(text, str):
-        raise ValueError(allowed)
-    text = text.strip()
-    if text in GROUPINGS:
-        return text
-    if text.startswith("chunks:"):
-        size = text.partition(":")[2]
-        if not size.isdigit() or int(size) < 1:
-            raise ValueError(allowed)
-        return text
-    try:
-        groups = [[int(v) for v in part.split(",")] for part in text.split(";")]
-    except ValueError:
-        raise ValueError(allowed) from None
-    if any(v < 0 for group in groups for v in group):
-        raise ValueError(allowed)
-    for group in groups:
-        if len(set(group)) != len(group):
-            raise ValueError(f"input_groups: dimension repeated within the map {','.join(map(str, group))} of {text!r}")
-    return text
-
-
-def parse_groups(text: str, obs_dim: int) -> list[list[int]]:
-    """The observed dimensions each map sees, ``[[0, 1], [2, 3], ...]``, for ``obs_dim`` dimensions.
-
-    ``all``: one map over every dimension; ``pairs``: one per pair ``(i, j)``, i < j, ``triples`` one per
-    triple (one map over all of them where there are fewer); ``singles``: one per dimension; ``chunks:K``: consecutive runs of K in index order
-    (the last one shorter); index lists as written.
-
-    Raises:
-      ValueError: a form ``check_groups`` refuses, or an index outside ``0 .. obs_dim - 1`` (one line).
-    """
-    text = check_groups(text)
-    dims = list(range(obs_dim))
-    if text == "all":
-        return [dims]
-    if text in ("pairs", "triples"):
-        return [list(p) for p in itertools.combinations(dims, 2 if text == "pairs" else 3)] or [dims]
-    if text == "singles":
-        return [[d] for d in dims]
-    if text.startswith("chunks:"):
-        size = int(text.partition(":")[2])
-        return [dims[i:i + size] for i in range(0, obs_dim, size)]
-    groups = [[int(v) for v in part.split(",")] for part in text.split(";")]
-    bad = sorted({v for group in groups for v in group if v >= obs_dim})
-    if bad:
-        raise ValueError(f"input_groups={text!r} names dimension(s) {', '.join(map(str, bad))}, but the "
-                         f"observation has {obs_dim} (0 .. {obs_dim - 1})")
-    return groups
-
-
-def group_table(groups: list[list[int]]) -> np.ndarray:
-    """The groups as a ``(G, width)`` index table, -1 beyond each group's size (the kernels' form)."""
-    width = max(len(group) for group in groups)
-    table = np.full((len(groups), width), -1, dtype=np.int64)
-    for g, group in enumerate(groups):
-        table[g, :len(group)] = group
-    return table
-
+__all__ = ["features", "act_kernel", "learn_kernel", "predict_kernel", "greedy_kernel"]
 
 @numba.njit(cache=True, nogil=True)
 def features(x, weights, groups, shapes, k, units, phi, part, order, squared):
@@ -330,15 +255,23 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     rest = values[a_k] - parts[g, a_k]
                     table[centre, a_k] = value + step * weight * (target - rest - value)
                     continue
-                grid_row(offsets_s, shapes[trial, g, 0], shapes[trial, g, 1], centre - first, n_s, psi_s)
-                for m in range(n_units):
-                    if psi_s[m] > 0.0:
-                        a_m = step * weight * psi_s[m]
-                        for a in range(n_actions):
-                            if psi_a[a] > 0.0:
-                                value = table[first + m, a]
-                                rest = values[a] - parts[g, a]
-                                table[first + m, a] = value + a_m * psi_a[a] * (target - rest - value)
+                # Only the units within the neighbourhood's reach (grid distance < n_s + 1) can move;
+                # each entry moves on its own, so the order of the units does not matter.
+                rows, cols = shapes[trial, g, 0], shapes[trial, g, 1]
+                r0 = (centre - first) // cols
+                c0 = (centre - first) - r0 * cols
+                reach = int(n_s + 1.0)
+                for r in range(max(0, r0 - reach), min(rows, r0 + reach + 1)):
+                    for c in range(max(0, c0 - reach), min(cols, c0 + reach + 1)):
+                        psi = max(0.0, 1.0 - offsets_s[abs(r - r0), abs(c - c0)] / (n_s + 1.0))
+                        if psi > 0.0:
+                            m = first + r * cols + c
+                            a_m = step * weight * psi
+                            for a in range(n_actions):
+                                if psi_a[a] > 0.0:
+                                    value = table[m, a]
+                                    rest = values[a] - parts[g, a]
+                                    table[m, a] = value + a_m * psi_a[a] * (target - rest - value)
         # Step 9: each map moves towards its part of the observation round its nearest unit; a growing
         # map adds the winner's squared distance to its sum first, and grows when it is time.
         for g in range(n_groups):

@@ -32,7 +32,7 @@ from typing import Literal
 
 import numpy as np
 
-from somarm.learners import _kernels, groups, growing, interpolation
+from somarm.learners import _kernels, grouping, groups, growing, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
@@ -140,7 +140,7 @@ class SOMQConfig(ConfigBase):
         if span != 1.0 and self.action_init != "grid":
             raise ValueError(f"grid_span applies only with action_init='grid', got action_init={self.action_init!r}")
         object.__setattr__(self, "grid_span", span)
-        object.__setattr__(self, "input_groups", groups.check_groups(self.input_groups))
+        object.__setattr__(self, "input_groups", grouping.check_groups(self.input_groups))
         if isinstance(self.k_nearest, bool) or not isinstance(self.k_nearest, (int, np.integer)) or self.k_nearest < 1:
             raise ValueError(f"k_nearest must be a whole number >= 1, got {self.k_nearest!r}")
         object.__setattr__(self, "k_nearest", int(self.k_nearest))
@@ -213,7 +213,7 @@ class SOMQ(MapLearner):
             # obs_dim may be a lower bound (a run's check before its task is built): index lists then
             # count as many dimensions as they name.
             named = [int(v) for v in config.input_groups.replace(";", ",").split(",") if v.strip().isdigit()]
-            table = groups.group_table(groups.parse_groups(config.input_groups, max([obs_dim, *(v + 1 for v in named)])))
+            table = grouping.group_table(grouping.parse_groups(config.input_groups, max([obs_dim, *(v + 1 for v in named)])))
             n_maps, width = table.shape
             n_floats += n_trials * (n_maps * n_s * (width + n_a + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
@@ -231,7 +231,7 @@ class SOMQ(MapLearner):
         spread = grid_actions(cfg.action_shape, self.action_low, self.action_high, cfg.grid_span) \
             if cfg.action_init == "grid" else None
         if cfg.grouped:
-            self._groups = groups.group_table(groups.parse_groups(cfg.input_groups, self.obs_dim))
+            self._groups = grouping.group_table(grouping.parse_groups(cfg.input_groups, self.obs_dim))
             n_maps = self._groups.shape[0]
             self.input_weights = np.zeros((self.n_trials, n_maps * n_s, self._groups.shape[1]))
             self._group_units = np.zeros((self.n_trials, n_maps, cfg.k_nearest), dtype=np.int64)

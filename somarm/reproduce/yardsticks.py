@@ -243,7 +243,7 @@ def _map_rows(env_id: str, policy: Policy, map_steps: int | None, seed: int,
     rounded to each of ``roundings`` (label, levels) first: the interpolated response's form when
     every unit holds one torque of a grid."""
     from somarm.learners import presets
-    from somarm.learners.groups import parse_groups
+    from somarm.learners.grouping import parse_groups
     from somarm.learners.interpolation import n_basis_for
     from somarm.tasks import gym_envs
 

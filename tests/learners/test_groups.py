@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from somq_cases import small_config
 
-from somarm.learners import groups
+from somarm.learners import grouping
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.somq import SOMQ, SOMQConfig
 
@@ -53,13 +53,13 @@ def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
 
 
 def test_groupings_name_the_dimensions_each_map_sees():
-    assert groups.parse_groups("all", 3) == [[0, 1, 2]]
-    assert groups.parse_groups("pairs", 3) == [[0, 1], [0, 2], [1, 2]]
-    assert groups.parse_groups("triples", 4) == [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
-    assert groups.parse_groups("singles", 2) == [[0], [1]]
-    assert groups.parse_groups("chunks:2", 5) == [[0, 1], [2, 3], [4]]
-    assert groups.parse_groups("0,3; 1", 4) == [[0, 3], [1]]
-    np.testing.assert_array_equal(groups.group_table([[0, 3], [1]]), [[0, 3], [1, -1]])
+    assert grouping.parse_groups("all", 3) == [[0, 1, 2]]
+    assert grouping.parse_groups("pairs", 3) == [[0, 1], [0, 2], [1, 2]]
+    assert grouping.parse_groups("triples", 4) == [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
+    assert grouping.parse_groups("singles", 2) == [[0], [1]]
+    assert grouping.parse_groups("chunks:2", 5) == [[0, 1], [2, 3], [4]]
+    assert grouping.parse_groups("0,3; 1", 4) == [[0, 3], [1]]
+    np.testing.assert_array_equal(grouping.group_table([[0, 3], [1]]), [[0, 3], [1, -1]])
 
 
 @pytest.mark.parametrize("text, match", [("two", "input_groups must be"), ("chunks:0", "input_groups must be"),
