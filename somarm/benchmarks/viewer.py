@@ -29,7 +29,7 @@ def _train_seconds(config, view) -> tuple[float, float, int]:
     from somarm.run import RunGroup
     from somarm.viewer.live import greedy_policy
 
-    group = RunGroup([config], lanes=1)
+    group = RunGroup([config])
     if view is not None:
         view.set_policy(greedy_policy(group.learners[0]))
     start, cpu = time.perf_counter(), time.process_time()

@@ -11,7 +11,6 @@ from somarm.protocols import BatchedTask, Learner
 from somarm.run.build import check_memory_needs, make_learner, make_task
 from somarm.run.config import RunConfig
 from somarm.run.loop import Episodes, StepHook, loop
-from somarm.validation import check_int
 
 __all__ = ["RunResult", "train", "train_group", "share_lanes", "RunGroup"]
 
@@ -83,14 +82,13 @@ def train_group(configs: list[RunConfig], *, progress: bool = True, on_step: Ste
     Returns:
       One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays (one task).
     """
-    lanes = 1 if on_step is not None else None
-    return RunGroup(configs, lanes=lanes).train(progress=progress, on_step=on_step, label=label,
-                                                snapshots_at=snapshots_at)
+    return RunGroup(configs).train(progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)
 
 
 def share_lanes(trials: list[int], lanes: int) -> list[int]:
-    """The lane (thread) of each config in a lockstep group: the most trials first, each to the
-    lane with the fewest so far (ties to the lowest lane). With one lane, or one config, all in lane 0.
+    """The lane (a process of ``run.split``) of each config of a lockstep group: the most trials first,
+    each to the lane with the fewest so far (ties to the lowest lane). With one lane, or one config,
+    all in lane 0.
     """
     load = [0] * max(1, min(lanes, len(trials)))
     lane_of = [0] * len(trials)
@@ -112,31 +110,21 @@ class RunGroup:
     where a bad preset, ``--set`` or ``--task-set`` fails, so a caller can build first (fail fast),
     then prepare its output, then ``train`` what it built.
 
-    With several threads (``tasks.threads()``, 2 by default) the configs are shared out between
-    lanes (``share_lanes``), each with its own tasks and learners, stepped side by side in one
-    thread each: a lane's physics, learning and drawing run while the other lane's do. A trial's
-    arithmetic does not depend on its lane, so the results equal one lane's (and separate runs).
+    A trial's arithmetic does not depend on the group it is in, so the results equal separate runs.
 
     Args:
       configs: the configs of the group.
-      lanes: threads to share the configs between (default ``tasks.threads()``; at most one per config).
 
     Raises:
       ValueError: a bad setting, or configs that do not share backend, steps and block.
     """
 
-    def __init__(self, configs: list[RunConfig], *, lanes: int | None = None) -> None:
+    def __init__(self, configs: list[RunConfig]) -> None:
         self.configs = [c.resolved() for c in configs]
         if len({(c.backend, c.n_steps, c.block) for c in self.configs}) != 1:
             raise ValueError("a group shares backend, steps and block; these differ")
         check_memory_needs(self.configs)
-        if lanes is None:
-            from somarm import tasks
-
-            lanes = tasks.threads()
-        lane_of = share_lanes([c.n_trials for c in self.configs], check_int("lanes", lanes))
-        keys = [(c.task, json.dumps(c.task_params, sort_keys=True), c.seed, lane)
-                for c, lane in zip(self.configs, lane_of, strict=True)]
+        keys = [(c.task, json.dumps(c.task_params, sort_keys=True), c.seed) for c in self.configs]
         distinct = list(dict.fromkeys(keys))
         self.tasks = []
         for key in distinct:
@@ -154,9 +142,6 @@ class RunGroup:
             self.columns.append(slice(int(offsets[i]) + filled[i], int(offsets[i]) + filled[i] + config.n_trials))
             filled[i] += config.n_trials
         self.learners = [make_learner(c, self.tasks[i]) for c, i in zip(self.configs, self.owners, strict=True)]
-        # The tasks (and so their learners) each thread steps; one lane when there is one thread.
-        self.lanes = [lane for lane in ([i for i, key in enumerate(distinct) if key[3] == k]
-                                        for k in range(max(lane_of) + 1)) if lane]
 
     def train(self, *, progress: bool = True, on_step: StepHook | None = None, label: str | None = None,
               snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
@@ -166,12 +151,9 @@ class RunGroup:
           ValueError: ``on_step`` for a group of several tasks or seeds.
         """
         first = self.configs[0]
-        if on_step is not None and len(self.lanes) > 1:
-            raise ValueError("on_step needs a group in one lane (RunGroup(..., lanes=1))")
         curves = loop(self.tasks, self.learners, self.parts, owners=self.owners, n_steps=first.n_steps,
                       block=first.block, progress=progress, on_step=on_step,
-                      label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at,
-                      lanes=self.lanes)
+                      label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at)
         results = []
         for config, learner, column, taken in zip(self.configs, self.learners, self.columns, curves.snapshots,
                                                   strict=True):

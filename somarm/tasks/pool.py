@@ -1,8 +1,8 @@
 """The worker threads the MuJoCo batches share (arms and projectiles): one pool per size, made once.
 
 MuJoCo releases the GIL while it steps, so a large batch split over threads runs in parallel.
-A thread that is itself one of several working side by side (the lanes of a lockstep group,
-``somarm.run.loop``) keeps its batches to itself: ``single_threaded`` holds ``threads_here`` at 1.
+A process that is itself one of several working side by side (the shares of a long lockstep group,
+``somarm.run.split``) keeps its batches to itself: ``single_threaded`` holds ``threads_here`` at 1.
 """
 
 from __future__ import annotations

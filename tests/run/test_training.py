@@ -61,56 +61,23 @@ def test_group_of_different_throw_tasks_equals_separate_runs():
         _tiny(task="throw_wind", n_steps=300, seed=8),  # another seed: independent trials, same step
     ]
     alone = [run.train(config, progress=False) for config in configs]
-    for lanes in (1, 2, 3):  # shared out between threads, each lane stepping its own tasks
-        group = run.RunGroup(configs, lanes=lanes)
-        assert len(group.lanes) == lanes
-        for config, result, single in zip(configs, group.train(progress=False), alone, strict=True):
-            np.testing.assert_array_equal(result.block_means, single.block_means)
-            np.testing.assert_array_equal(result.block_sq_means, single.block_sq_means)
-            np.testing.assert_array_equal(result.learner.q, single.learner.q)
-            assert result.task.name == config.task
+    group = run.RunGroup(configs)
+    assert len(group.tasks) == 4  # throw_distance (one task for both of its configs), throw_mass, throw_wind twice
+    for config, result, single in zip(configs, group.train(progress=False), alone, strict=True):
+        np.testing.assert_array_equal(result.block_means, single.block_means)
+        np.testing.assert_array_equal(result.block_sq_means, single.block_sq_means)
+        np.testing.assert_array_equal(result.learner.q, single.learner.q)
+        assert result.task.name == config.task
     with pytest.raises(ValueError, match="on_step needs a group on one task and seed"):
         run.train_group(configs, progress=False, on_step=lambda *args: None)
-    with pytest.raises(ValueError, match="on_step needs a group in one lane"):
-        run.RunGroup(configs, lanes=2).train(progress=False, on_step=lambda *args: None)
-    with pytest.raises(ValueError, match="lanes must be"):
-        run.RunGroup(configs, lanes=0)
 
 
-def test_lanes_share_the_trials_evenly_most_first():
+def test_split_shares_the_trials_between_processes_evenly_most_first():
     assert run.share_lanes([100, 100, 100, 100], 2) == [0, 1, 0, 1]
     assert run.share_lanes([20, 20, 20], 2) == [0, 1, 0]
     assert run.share_lanes([1, 50, 30, 30], 2) == [0, 0, 1, 1]  # 50 + 1 | 30 + 30
     assert run.share_lanes([5, 5], 4) == [0, 1]  # no more lanes than configs
     assert run.share_lanes([5, 5, 5], 1) == [0, 0, 0]
-
-
-def test_the_lane_policy_keeps_the_way_that_measured_faster():
-    from somarm.run.loop import _LanePolicy
-
-    for lanes_faster in (True, False):
-        policy = _LanePolicy(enabled=True)
-        ways = []
-        for step in range(2 * _LanePolicy.PERIOD):
-            threaded = policy.threaded(step)
-            ways.append(threaded)
-            policy.record(threaded, 1.0 if threaded == lanes_faster else 2.0)
-        probe = _LanePolicy.PROBE
-        for start in (0, _LanePolicy.PERIOD):  # each period probes one thread, then lanes, then keeps the faster
-            assert ways[start:start + probe] == [False] * probe
-            assert ways[start + probe:start + 2 * probe] == [True] * probe
-            assert set(ways[start + 2 * probe:start + _LanePolicy.PERIOD]) == {lanes_faster}
-    disabled = _LanePolicy(enabled=False)
-    assert not any(disabled.threaded(step) for step in range(100))
-
-
-def test_a_loop_refuses_lanes_that_do_not_share_out_its_tasks():
-    from somarm.run import loop as training
-
-    group = run.RunGroup([_tiny(task="throw"), _tiny(task="throw_distance")], lanes=1)
-    with pytest.raises(ValueError, match="lanes must share out the tasks"):
-        training.loop(group.tasks, group.learners, group.parts, owners=group.owners, n_steps=1, block=1,
-                      progress=False, lanes=[[0]])
 
 
 def test_interrupt_leaves_valid_partial_run(tmp_path):

@@ -169,7 +169,7 @@ def test_live_training_is_followed_counted_and_said_finished(browser, tmp_path):
     from somarm.viewer.live import LiveView, greedy_policy
 
     config = run.RunConfig(task="reach2", n_steps=4000, seed=3)
-    group = run.RunGroup([config], lanes=1)
+    group = run.RunGroup([config])
     with LiveView("reach2", policy=greedy_policy(group.learners[0]), hold_s=0.3, n_goals=4, n_steps=4000,
                   lines=["somq learner, trial 0, seed 3"]) as view:
         bare = view.url.replace("/static/", "/")
