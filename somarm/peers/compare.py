@@ -27,8 +27,9 @@ from somarm import __version__, tasks
 from somarm.io import atomic_write_json
 from somarm.run import evaluation
 
-__all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "ladder", "check", "compare", "peers_missing",
-           "peer_budget", "default_samples", "task_defaults", "run_unit", "engine_of_parts"]
+__all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "Plan", "OurRunner", "PeerRunner", "make_plan", "ladder",
+           "check", "compare", "peers_missing", "peer_budget", "default_samples", "task_defaults", "run_unit",
+           "engine_of_parts"]
 
 OURS = ("somq", "somq+", "motoric", "tabular")
 PEERS = ("td3", "sac")
@@ -94,18 +95,17 @@ def task_defaults(task: str) -> tuple[str, int]:
     return record.preset, record.n_steps
 
 
-def _our_config(kind: str, task: str):
-    """A somarm learner's config on ``task``: its preset's (tabular: its own defaults with the preset's
-    gamma, so that on a ``gym:ID`` task it learns returns, not the next reward). ``somq`` answers with the winning action
-    unit (the paper's response) even where the preset interpolates (the benchmarks' presets), so that
-    its row and SOM-Q+'s differ; ``somq+`` takes the preset's ``+`` table where there is one
-    (``table1+`` for reach2) with the interpolated response."""
+def _our_config(kind: str, preset: str):
+    """A somarm learner's config from the task's ``preset``: the preset's (tabular: its own defaults
+    with the preset's gamma, so that on a ``gym:ID`` task it learns returns, not the next reward). ``somq``
+    answers with the winning action unit (the paper's response) even where the preset interpolates (the
+    benchmarks' presets), so that its row and SOM-Q+'s differ; ``somq+`` takes the preset's ``+`` table
+    where there is one (``table1+`` for reach2) with the interpolated response."""
     import dataclasses
 
     from somarm.learners import presets
     from somarm.learners.tabular import TabularConfig
 
-    preset = task_defaults(task)[0]
     if kind == "tabular":  # its own exploration; the preset's discount (0 on the paper's one-step tasks)
         return TabularConfig(gamma=presets.get(preset).gamma)
     if kind == "somq+":
@@ -115,14 +115,175 @@ def _our_config(kind: str, task: str):
     return dataclasses.replace(config, response="winner") if kind == "somq" else config
 
 
-def check(config: CompareConfig) -> list[str]:
-    """Fail fast: the learners that can run, or a one-line ValueError naming what cannot.
+@dataclass(frozen=True)
+class OurRunner:
+    """How one of somarm's learners trains and is scored in a comparison."""
+
+    kind: str
+    settings: Any  #: the learner's config (``SOMQConfig``, ``MotoricConfig`` or ``TabularConfig``)
+    budget: int  #: training samples
+
+    @property
+    def rungs(self) -> list[int]:
+        return ladder(self.budget)
+
+    def described(self) -> dict[str, Any]:
+        """What its training depends on besides the task and the seed: its config."""
+        return self.settings.to_dict()
+
+    def fingerprint_params(self, params: dict[str, Any]) -> dict[str, Any]:
+        """The task parameters its training reads: all of them (it learns on the scaled observations)."""
+        return params
+
+    def _make(self, task, seed: int):
+        from somarm import learners
+
+        return learners.make("somq" if self.kind == "somq+" else self.kind, self.settings, **_bounds(task), seed=seed)
+
+    def run(self, plan: Plan, seed: int, score: _Scorer, *, warm_up: bool = False):
+        """Train at ``seed``, scoring at every rung: ``(values, walls, settings)``."""
+        task = plan.task(seed)
+        learner = self._make(task, seed)
+        if warm_up:  # untimed: numba compiles SOM-Q's kernels on first use
+            spare = self._make(task, seed)
+            _train_ours(plan.task(seed), spare, 2)
+            spare.predict(task.observation_low[None, None, :])
+        values, walls, wall, done = [], [], 0.0, 0
+        for rung in self.rungs:
+            start = time.perf_counter()
+            _train_ours(task, learner, rung - done)
+            wall += time.perf_counter() - start
+            done = rung
+            task.set_step(done)  # moving goals (four_goals): score in the phase reached
+            score.task.set_step(done)
+            values.append(score(lambda x: learner.predict(x[None])[0], last=rung == self.rungs[-1]))
+            walls.append(wall)
+        return values, walls, self.settings.to_dict()
+
+
+@dataclass(frozen=True)
+class PeerRunner:
+    """How Stable-Baselines3's TD3 or SAC trains and is scored in a comparison."""
+
+    kind: str
+    budget: int  #: training samples
+    gym_id: str | None  #: the Gymnasium environment of a ``gym:ID`` task (None: a somarm task's)
+
+    @property
+    def rungs(self) -> list[int]:
+        return ladder(self.budget)
+
+    def described(self) -> dict[str, Any]:
+        """What its training depends on besides the task and the seed: the Zoo's entry and SB3's version."""
+        import stable_baselines3
+
+        from somarm.peers import zoo
+
+        entry = zoo.zoo_entry(self.kind, self.gym_id) if self.gym_id else None
+        return {"zoo": entry, "stable_baselines3": stable_baselines3.__version__}
+
+    def fingerprint_params(self, params: dict[str, Any]) -> dict[str, Any]:
+        """The task parameters its training reads: not a ``gym:ID``'s observation scaling (``_peer_params``)."""
+        return _peer_params(params) if self.gym_id else params
+
+    def _env(self, task: str, params: dict[str, Any]):
+        """The Gymnasium environment it trains on, and how it is described in ``compare.json``."""
+        import gymnasium
+
+        from somarm.peers.gym import env_id
+
+        if self.gym_id:
+            return gymnasium.make(self.gym_id, **_peer_params(params)), self.gym_id + " (its own observations and actions)"
+        return gymnasium.make(env_id(task), **params), env_id(task) + " (actions in [-1, 1] mapped to the task's box)"
+
+    def run(self, plan: Plan, seed: int, score: _Scorer, *, warm_up: bool = False):
+        """Train at ``seed``, scoring at every rung: ``(values, walls, settings)``."""
+        import stable_baselines3
+        import torch
+
+        from somarm.peers import zoo
+        from somarm.peers.gym import to_task_actions
+
+        torch.set_num_threads(1)
+        env, described = self._env(plan.config.task, plan.params)
+        algorithm = {"td3": stable_baselines3.TD3, "sac": stable_baselines3.SAC}[self.kind]
+        if self.gym_id:
+            keywords, _, source = zoo.settings(self.kind, self.gym_id, env.action_space.shape[0])
+        else:
+            keywords, source = zoo.defaults(self.kind, env.action_space.shape[0])
+        if warm_up:  # untimed: torch builds its kernels on the first gradient step
+            algorithm("MlpPolicy", env, seed=seed, device="cpu", learning_starts=1, batch_size=2).learn(3)
+        model = algorithm("MlpPolicy", env, seed=seed, device="cpu", **keywords)
+        task = score.task
+
+        def predict(x: np.ndarray) -> np.ndarray:
+            if task.episodic:  # a Gymnasium task: the model acts on the environment's own observations
+                actions, _ = model.predict(task.unscale(x).astype(env.observation_space.dtype), deterministic=True)
+                return np.clip(np.asarray(actions, dtype=np.float64), task.action_low, task.action_high)
+            actions, _ = model.predict(x.astype(np.float32), deterministic=True)
+            return to_task_actions(actions, task.action_low, task.action_high)
+
+        values, walls, wall, done = [], [], 0.0, 0
+        for rung in self.rungs:
+            start = time.perf_counter()
+            model.learn(total_timesteps=rung - done, reset_num_timesteps=done == 0)
+            wall += time.perf_counter() - start
+            done = rung
+            values.append(score(predict, last=rung == self.rungs[-1]))
+            walls.append(wall)
+        settings = {name: repr(getattr(model, name)) for name in _PEER_FIELDS if hasattr(model, name)}
+        settings.update(policy="MlpPolicy", net_arch=repr(model.policy.net_arch if hasattr(model.policy, "net_arch")
+                                                           else None), torch_threads=1, source=source,
+                        stable_baselines3=stable_baselines3.__version__, torch=torch.__version__,
+                        environment=described)
+        env.close()
+        return values, walls, settings
+
+
+Runner = OurRunner | PeerRunner
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One comparison resolved once (``make_plan``): the task's parameters that every learner and seed
+    shares, and a runner per learner, in the order asked."""
+
+    config: CompareConfig
+    params: dict[str, Any]
+    runners: dict[str, Runner]
+
+    @property
+    def seeds(self) -> list[int]:
+        return list(range(self.config.seed, self.config.seed + self.config.seeds))
+
+    def task(self, seed: int):
+        """The task of one seed (one trial)."""
+        return tasks.make(self.config.task, seed=seed, **self.params)
+
+    def scorer(self) -> _Scorer:
+        """A scorer of greedy policies (each unit its own: a moving goal's phase is the scorer's state)."""
+        return _Scorer(self.config, self.params)
+
+    def fingerprint(self, kind: str, seed: int, score: _Scorer, described: dict[str, Any] | None = None) -> dict:
+        """What one learner's training and scores at one seed depend on: a seed's record is reused only
+        where all of it is the same."""
+        runner = self.runners[kind]
+        config = self.config
+        scored = {"episodes": config.episodes} if score.episodic else {"observations": config.observations}
+        return json.loads(json.dumps({
+            "task": config.task, "task_params": runner.fingerprint_params(self.params), "learner": kind,
+            "seed": seed, "rungs": runner.rungs, **scored, "eval_seed": config.eval_seed,
+            "settings": runner.described() if described is None else described,
+            "somarm_version": __version__}, default=repr))
+
+
+def make_plan(config: CompareConfig) -> Plan:
+    """Check ``config`` and resolve it once: the task's record and parameters, a runner per learner.
 
     Raises:
       ValueError: an unknown task or learner, bad counts, a learner that cannot take the task
         (tabular on reach20), or TD3/SAC without the ``peers`` extra.
     """
-    from somarm import learners
     from somarm.validation import check_int
 
     for name in ("samples", "seeds", "observations"):
@@ -135,36 +296,39 @@ def check(config: CompareConfig) -> list[str]:
     if unknown or not config.learners:
         raise ValueError(f"unknown learner(s) {', '.join(unknown) or '(none given)'}; allowed: {', '.join(LEARNERS)}")
     check_int("--episodes", config.episodes)
-    if tasks.record(config.task).episodic and not config.task.startswith("gym:"):
+    record = tasks.record(config.task)
+    if record.episodic and not config.task.startswith("gym:"):
         one_step = [name for name in tasks.names() if not tasks.record(name).episodic]
         raise ValueError(f"{config.task} has multi-step episodes; compare takes gym:ID and the one-step tasks: "
                          f"{', '.join(one_step)}")
-    task = _task(config, config.seed)
-    for kind in config.learners:
-        if kind in OURS:
-            try:
-                learners.make("somq" if kind == "somq+" else kind, _our_config(kind, config.task), **_bounds(task))
-            except ValueError as exc:
-                raise ValueError(f"{kind} cannot learn {config.task}: {exc}") from None
     if any(k in PEERS for k in config.learners) and (reason := peers_missing()):
         raise ValueError(reason)
-    return list(config.learners)
-
-
-def _params(config: CompareConfig) -> dict[str, Any]:
-    """The task parameters every learner and seed shares: for a ``gym:ID`` task with an unbounded
-    observation Box, its scaling estimated once, from the first seed (``check`` and ``compare`` share it)."""
-    return json.loads(_completed(config.task, json.dumps(config.task_params, sort_keys=True), config.seed))
+    params = json.loads(_completed(config.task, json.dumps(config.task_params, sort_keys=True), config.seed))
+    gym_id = config.task[4:] if config.task.startswith("gym:") else None
+    runners: dict[str, Runner] = {}
+    task = tasks.make(config.task, seed=config.seed, **params)
+    for kind in config.learners:
+        if kind in PEERS:
+            runners[kind] = PeerRunner(kind, peer_budget(kind, config), gym_id)
+            continue
+        runners[kind] = OurRunner(kind, _our_config(kind, record.preset), config.samples)
+        try:
+            runners[kind]._make(task, config.seed)
+        except ValueError as exc:
+            raise ValueError(f"{kind} cannot learn {config.task}: {exc}") from None
+    return Plan(config, params, runners)
 
 
 @functools.lru_cache(maxsize=8)
 def _completed(task: str, params_json: str, seed: int) -> str:
+    """The task parameters completed at ``seed`` (a ``gym:ID``'s observation scaling estimated), as JSON;
+    kept, so that checking a comparison and then running it estimate the scaling once."""
     return json.dumps(tasks.record(task).complete(tasks.check_params(task, json.loads(params_json)), seed))
 
 
-def _task(config: CompareConfig, seed: int, params: dict[str, Any] | None = None):
-    """The task of one seed (one trial)."""
-    return tasks.make(config.task, seed=seed, **(_params(config) if params is None else params))
+def check(config: CompareConfig) -> list[str]:
+    """Fail fast: the learners that can run, or a one-line ValueError naming what cannot (``make_plan``)."""
+    return list(make_plan(config).runners)
 
 
 class _Scorer:
@@ -177,7 +341,7 @@ class _Scorer:
     """
 
     def __init__(self, config: CompareConfig, params: dict[str, Any]) -> None:
-        self.task = _task(config, config.seed, params)
+        self.task = tasks.make(config.task, seed=config.seed, **params)
         self.episodic = self.task.episodic
         rng = evaluation.evaluation_rng(config.eval_seed)
         if self.episodic:
@@ -214,31 +378,6 @@ def _train_ours(task, learner, steps: int) -> None:
             learner.learn(task.step(learner.act(task.reset())))
 
 
-def _run_ours(kind: str, config: CompareConfig, seed: int, rungs: list[int], score: _Scorer,
-              params: dict[str, Any], *, warm_up: bool = False):
-    from somarm import learners
-
-    task = _task(config, seed, params)
-    settings = _our_config(kind, config.task)
-    make = "somq" if kind == "somq+" else kind
-    learner = learners.make(make, settings, **_bounds(task), seed=seed)
-    if warm_up:  # untimed: numba compiles SOM-Q's kernels on first use
-        spare = learners.make(make, settings, **_bounds(task), seed=seed)
-        _train_ours(_task(config, seed, params), spare, 2)
-        spare.predict(task.observation_low[None, None, :])
-    values, walls, wall, done = [], [], 0.0, 0
-    for rung in rungs:
-        start = time.perf_counter()
-        _train_ours(task, learner, rung - done)
-        wall += time.perf_counter() - start
-        done = rung
-        task.set_step(done)  # moving goals (four_goals): score in the phase reached
-        score.task.set_step(done)
-        values.append(score(lambda x: learner.predict(x[None])[0], last=rung == rungs[-1]))
-        walls.append(wall)
-    return values, walls, settings.to_dict()
-
-
 def _peer_params(params: dict[str, Any]) -> dict[str, Any]:
     """What TD3 and SAC read of a ``gym:ID`` task's parameters: not the observation scaling, since they
     train and act on the environment's own observations (the scorer's scale-and-unscale round trip
@@ -246,24 +385,10 @@ def _peer_params(params: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in params.items() if k not in ("observation_low", "observation_high")}
 
 
-def _peer_env(config: CompareConfig, params: dict[str, Any]):
-    """The Gymnasium environment TD3 and SAC train on, and how it is described in ``compare.json``."""
-    import gymnasium
-
-    from somarm.peers.gym import env_id
-
-    if config.task.startswith("gym:"):
-        return gymnasium.make(config.task[4:], **_peer_params(params)), config.task[4:] + " (its own observations and actions)"
-    return (gymnasium.make(env_id(config.task), **params),
-            env_id(config.task) + " (actions in [-1, 1] mapped to the task's box)")
-
-
 def default_samples(task: str) -> int:
     """somarm's learners' samples when none are given: a ``gym:ID``'s run length (its benchmark
     preset's steps, which the held-out results use), else 10,000."""
     if task.startswith("gym:"):
-        from somarm import tasks
-
         return tasks.record(task).n_steps
     return 10_000
 
@@ -280,75 +405,6 @@ def peer_budget(kind: str, config: CompareConfig) -> int:
         if entry is not None:
             return int(entry["n_timesteps"])
     return config.samples
-
-
-def _run_peer(kind: str, config: CompareConfig, seed: int, rungs: list[int], score: _Scorer,
-              params: dict[str, Any], *, warm_up: bool = False):
-    import stable_baselines3
-    import torch
-
-    from somarm.peers import zoo
-    from somarm.peers.gym import to_task_actions
-
-    torch.set_num_threads(1)
-    env, described = _peer_env(config, params)
-    algorithm = {"td3": stable_baselines3.TD3, "sac": stable_baselines3.SAC}[kind]
-    if config.task.startswith("gym:"):
-        keywords, _, source = zoo.settings(kind, config.task[4:], env.action_space.shape[0])
-    else:
-        keywords, source = zoo.defaults(kind, env.action_space.shape[0])
-    if warm_up:  # untimed: torch builds its kernels on the first gradient step
-        algorithm("MlpPolicy", env, seed=seed, device="cpu", learning_starts=1, batch_size=2).learn(3)
-    model = algorithm("MlpPolicy", env, seed=seed, device="cpu", **keywords)
-    task = score.task
-
-    def predict(x: np.ndarray) -> np.ndarray:
-        if task.episodic:  # a Gymnasium task: the model acts on the environment's own observations
-            actions, _ = model.predict(task.unscale(x).astype(env.observation_space.dtype), deterministic=True)
-            return np.clip(np.asarray(actions, dtype=np.float64), task.action_low, task.action_high)
-        actions, _ = model.predict(x.astype(np.float32), deterministic=True)
-        return to_task_actions(actions, task.action_low, task.action_high)
-
-    values, walls, wall, done = [], [], 0.0, 0
-    for rung in rungs:
-        start = time.perf_counter()
-        model.learn(total_timesteps=rung - done, reset_num_timesteps=done == 0)
-        wall += time.perf_counter() - start
-        done = rung
-        values.append(score(predict, last=rung == rungs[-1]))
-        walls.append(wall)
-    settings = {name: repr(getattr(model, name)) for name in _PEER_FIELDS if hasattr(model, name)}
-    settings.update(policy="MlpPolicy", net_arch=repr(model.policy.net_arch if hasattr(model.policy, "net_arch")
-                                                       else None), torch_threads=1, source=source,
-                    stable_baselines3=stable_baselines3.__version__, torch=torch.__version__,
-                    environment=described)
-    env.close()
-    return values, walls, settings
-
-
-def _learner_settings(kind: str, config: CompareConfig) -> dict[str, Any]:
-    """What a learner's training depends on besides the task and the seed: the Zoo's entry and SB3's
-    version for a peer, the config for somarm's learners."""
-    if kind in PEERS:
-        import stable_baselines3
-
-        from somarm.peers import zoo
-
-        entry = zoo.zoo_entry(kind, config.task[4:]) if config.task.startswith("gym:") else None
-        return {"zoo": entry, "stable_baselines3": stable_baselines3.__version__}
-    return _our_config(kind, config.task).to_dict()
-
-
-def _fingerprint(kind: str, settings: dict[str, Any], config: CompareConfig, seed: int, rungs: list[int],
-                 params: dict[str, Any], score: _Scorer) -> dict:
-    """What one learner's training and scores at one seed depend on: a seed's record is reused only
-    where all of it is the same."""
-    scored = {"episodes": config.episodes} if score.episodic else {"observations": config.observations}
-    if kind in PEERS and config.task.startswith("gym:"):
-        params = _peer_params(params)
-    return json.loads(json.dumps({
-        "task": config.task, "task_params": params, "learner": kind, "seed": seed, "rungs": rungs, **scored,
-        "eval_seed": config.eval_seed, "settings": settings, "somarm_version": __version__}, default=repr))
 
 
 def _earlier_seed(path: Path, fingerprint: dict, progress: bool):
@@ -389,29 +445,28 @@ def engine_of_parts(engine: str, address: str | None):
 _WARMED: set[str] = set()
 
 
-def run_unit(config: CompareConfig, kind: str, seed: int, rungs: list[int], params: dict[str, Any]):
+def run_unit(plan: Plan, kind: str, seed: int):
     """One learner at one seed, in whatever process runs it (this one, or a Ray worker): its scores at
     the rungs, its training seconds and its settings, ``(values, walls, settings)``. The first unit of
     a learner in a process warms it up first, untimed (numba compiles SOM-Q's kernels, torch builds
     its own); the scores do not depend on it."""
     warm_up = kind not in _WARMED
     _WARMED.add(kind)
-    runner = _run_peer if kind in PEERS else _run_ours
-    return runner(kind, config, seed, rungs, _Scorer(config, params), params, warm_up=warm_up)
+    return plan.runners[kind].run(plan, seed, plan.scorer(), warm_up=warm_up)
 
 
-def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: bool = False,
+def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, resume: bool = False,
             engine: str | None = None, address: str | None = None) -> dict[str, Any]:
     """Train every learner on every seed, write ``out/compare.json`` and ``out/compare.png``.
 
-    Each learner at each seed is a unit (``run_unit``); its scores are kept in
-    ``out/seeds/<learner>-<seed>.json`` with everything they depend on, written by this process as
-    the unit comes back, and ``compare.json`` is rewritten (atomically) with every learner whose
-    seeds are all in, so an interruption keeps what finished (``"complete": false``). With
-    ``resume`` a seed whose record there matches is read back instead of trained again (a long
-    comparison goes on where it stopped). ``engine="ray"`` runs the units on the Ray cluster at
-    ``address`` (None: a local one; ``somarm.cluster``); the scores and settings are the same as
-    here, unit for unit. ``engine=None``: "local", or what ``engine_of_parts`` set.
+    The comparison is resolved once (``make_plan``; a ``Plan`` may be given); each learner at each seed
+    is then a unit (``run_unit``); its scores are kept in ``out/seeds/<learner>-<seed>.json`` with
+    everything they depend on, written by this process as the unit comes back, and ``compare.json`` is
+    rewritten (atomically) with every learner whose seeds are all in, so an interruption keeps what
+    finished (``"complete": false``). With ``resume`` a seed whose record there matches is read back
+    instead of trained again (a long comparison goes on where it stopped). ``engine="ray"`` runs the
+    units on the Ray cluster at ``address`` (None: a local one; ``somarm.cluster``); the scores and
+    settings are the same as here, unit for unit. ``engine=None``: "local", or what ``engine_of_parts`` set.
 
     Returns:
       The ``compare.json`` content: per learner ``samples`` (the ladder), ``error`` (rung x seed; for a
@@ -419,7 +474,7 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
       ``seconds_per_sample`` and ``settings``.
 
     Raises:
-      ValueError: as ``check``; an unknown engine or Ray missing; units that failed on the cluster
+      ValueError: as ``make_plan``; an unknown engine or Ray missing; units that failed on the cluster
         (after the others were kept). KeyboardInterrupt: after writing what finished.
     """
 
@@ -429,31 +484,29 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
     if engine is None:
         engine, address = _engine
     cluster.check_engine(engine, address)
-    learners = check(config)
-    params = _params(config)
-    score = _Scorer(config, params)
+    plan = config if isinstance(config, Plan) else make_plan(config)
+    config = plan.config
+    score = plan.scorer()
     result: dict[str, Any] = {
-        "task": config.task, "task_params": params, "seeds": list(range(config.seed, config.seed + config.seeds)),
+        "task": config.task, "task_params": plan.params, "seeds": plan.seeds,
         "eval_seed": config.eval_seed, "metric": score.metric,
         f"random_action_{score.metric}": score.random(config.eval_seed),
         "somarm_version": __version__, "complete": False, "learners": {},
     }
     result.update({"episodes": config.episodes} if score.episodic else {"observations": config.observations})
     (out / "seeds").mkdir(parents=True, exist_ok=True)
-    budgets = {kind: peer_budget(kind, config) if kind in PEERS else config.samples for kind in learners}
     found: dict[tuple[str, int], tuple] = {}  # (kind, seed) -> (values, walls, settings)
-    todo: list[tuple[str, int, list[int], dict]] = []  # (kind, seed, rungs, fingerprint)
-    for kind in learners:
-        rungs = ladder(budgets[kind])
-        learner_settings = _learner_settings(kind, config)
-        for seed in result["seeds"]:
-            fingerprint = _fingerprint(kind, learner_settings, config, seed, rungs, params, score)
+    todo: list[tuple[str, int, dict]] = []  # (kind, seed, fingerprint)
+    for kind, runner in plan.runners.items():
+        described = runner.described()
+        for seed in plan.seeds:
+            fingerprint = plan.fingerprint(kind, seed, score, described)
             earlier = _earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress) if resume else None
             if earlier is None:
-                todo.append((kind, seed, rungs, fingerprint))
+                todo.append((kind, seed, fingerprint))
             else:
                 found[kind, seed] = tuple(earlier)
-                _said(config, kind, seed, budgets[kind], score.metric, found[kind, seed], kept=True, progress=progress)
+                _said(plan, kind, seed, score.metric, found[kind, seed], kept=True, progress=progress)
 
     def keep(kind: str, seed: int, fingerprint: dict, unit_result) -> None:
         """A unit's result: its seed record, its line, and compare.json with every learner now complete."""
@@ -461,14 +514,14 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
         atomic_write_json(out / "seeds" / f"{kind}-{seed}.json",
                           {"fingerprint": fingerprint, "values": v, "walls": w, "settings": settings})
         found[kind, seed] = (v, w, settings)
-        _said(config, kind, seed, budgets[kind], score.metric, found[kind, seed], kept=False, progress=progress)
-        _fill(result, found, learners, budgets, score.metric)
+        _said(plan, kind, seed, score.metric, found[kind, seed], kept=False, progress=progress)
+        _fill(result, found, plan, score.metric)
         atomic_write_json(out / "compare.json", result)
 
     if engine == "ray":
-        units = [cluster.Unit(f"{kind} seed {seed}", run_unit, (config, kind, seed, rungs, params), kind=kind)
-                 for kind, seed, rungs, _ in todo]
-        fingerprints = {f"{kind} seed {seed}": (kind, seed, fingerprint) for kind, seed, _, fingerprint in todo}
+        units = [cluster.Unit(f"{kind} seed {seed}", run_unit, (plan, kind, seed), kind=kind)
+                 for kind, seed, _ in todo]
+        fingerprints = {f"{kind} seed {seed}": (kind, seed, fingerprint) for kind, seed, fingerprint in todo}
         failed = cluster.run_units(units, on_done=lambda unit, r: keep(*fingerprints[unit.name], r), address=address,
                                    progress=progress)
         if failed:
@@ -476,38 +529,36 @@ def compare(config: CompareConfig, out: Path, *, progress: bool = True, resume: 
             raise ValueError(f"{len(failed)} of {len(units)} unit(s) failed on the cluster ({unit.name}: {why}); "
                              f"the units that came back are kept in {out / 'seeds'}: rerun with --resume for the rest")
     else:
-        for kind, seed, rungs, fingerprint in todo:
-            keep(kind, seed, fingerprint, run_unit(config, kind, seed, rungs, params))
-    _fill(result, found, learners, budgets, score.metric)
+        for kind, seed, fingerprint in todo:
+            keep(kind, seed, fingerprint, run_unit(plan, kind, seed))
+    _fill(result, found, plan, score.metric)
     result["complete"] = True
     atomic_write_json(out / "compare.json", result)
     compare_figure(result, out / "compare.png")
     return result
 
 
-def _said(config: CompareConfig, kind: str, seed: int, samples: int, metric: str, found: tuple, *, kept: bool,
-          progress: bool) -> None:
+def _said(plan: Plan, kind: str, seed: int, metric: str, found: tuple, *, kept: bool, progress: bool) -> None:
     """A unit's line: its learner and seed, its samples, training seconds and last score."""
     if progress:
         values, walls, _ = found
         again = " (kept from the earlier run)" if kept else ""
-        print(f"{config.task}/{kind} seed {seed}: {samples} samples in {walls[-1]:.1f} s, "
+        print(f"{plan.config.task}/{kind} seed {seed}: {plan.runners[kind].budget} samples in {walls[-1]:.1f} s, "
               f"greedy {metric} {values[-1]:.4g}{again}", file=sys.stderr, flush=True)
 
 
-def _fill(result: dict[str, Any], found: dict[tuple[str, int], tuple], learners: list[str], budgets: dict[str, int],
-          metric: str) -> None:
+def _fill(result: dict[str, Any], found: dict[tuple[str, int], tuple], plan: Plan, metric: str) -> None:
     """``result["learners"]``: every learner whose seeds are all in, in the order asked."""
     result["learners"] = {}
-    for kind in learners:
+    for kind, runner in plan.runners.items():
         if not all((kind, seed) in found for seed in result["seeds"]):
             continue
         per_seed = [found[kind, seed] for seed in result["seeds"]]
         walls = np.array([w for _, w, _ in per_seed])
         result["learners"][kind] = {
-            "samples": ladder(budgets[kind]),
+            "samples": runner.rungs,
             metric: np.array([v for v, _, _ in per_seed]).T.tolist(),
             "wall_seconds": walls.T.tolist(),
-            "seconds_per_sample": (walls[:, -1] / budgets[kind]).tolist(),
+            "seconds_per_sample": (walls[:, -1] / runner.budget).tolist(),
             "settings": per_seed[-1][2],
         }

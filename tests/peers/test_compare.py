@@ -207,12 +207,25 @@ def test_a_killed_comparison_goes_on_with_resume_keeping_its_finished_seeds(tmp_
 
 
 def test_somq_answers_with_the_winning_unit_and_somq_plus_interpolates_on_a_benchmark_preset():
-    assert compare._our_config("somq", "gym:Pendulum-v1").response == "winner"
-    plus = compare._our_config("somq+", "gym:Pendulum-v1")
-    assert plus.response == "interpolated" and plus.input_shape == compare._our_config("somq", "gym:Pendulum-v1").input_shape
-    assert compare._our_config("somq", "reach2").response == "winner"
-    assert compare._our_config("tabular", "gym:Pendulum-v1").gamma == 0.98  # returns, not the next reward
-    assert compare._our_config("tabular", "reach2").gamma == 0.0
+    def settings(kind, task):
+        return compare.make_plan(compare.CompareConfig(task=task, learners=(kind,), seeds=1)).runners[kind].settings
+
+    assert settings("somq", "gym:Pendulum-v1").response == "winner"
+    plus = settings("somq+", "gym:Pendulum-v1")
+    assert plus.response == "interpolated" and plus.input_shape == settings("somq", "gym:Pendulum-v1").input_shape
+    assert settings("somq", "reach2").response == "winner"
+    assert settings("tabular", "gym:Pendulum-v1").gamma == 0.98  # returns, not the next reward
+    assert settings("tabular", "reach2").gamma == 0.0
+
+
+def test_a_plan_resolves_the_task_parameters_and_each_learners_budget_once():
+    config = compare.CompareConfig(task="reach2", learners=("somq", "td3"), samples=300, peer_samples=120,
+                                   seeds=2, seed=4)
+    plan = compare.make_plan(config)
+    assert list(plan.runners) == ["somq", "td3"] and plan.seeds == [4, 5]
+    assert plan.runners["somq"].rungs == [100, 200, 300] and plan.runners["td3"].rungs == [100, 120]
+    assert plan.params == json.loads(json.dumps(plan.params))  # what compare.json and the seed records hold
+    assert isinstance(plan.runners["td3"], compare.PeerRunner) and isinstance(plan.runners["somq"], compare.OurRunner)
 
 
 def test_the_pendulum_speed_claim_fails_when_som_q_never_reaches_the_target_and_td3_does():
@@ -321,9 +334,12 @@ def test_a_peers_seed_record_does_not_depend_on_the_observation_scaling_it_never
     score = SimpleNamespace(episodic=True)
     scalings = [{"observation_low": [-1.0, -0.2, -2.0, -4.0], "observation_high": [1.0, 0.2, 2.0, 4.0]},
                 {"observation_low": [-1.0, -0.2, -1.9, -4.2], "observation_high": [1.0, 0.2, 1.9, 4.2]}]
+    runners = {"td3": compare.PeerRunner("td3", 100, "InvertedPendulum-v5"),
+               "sac": compare.PeerRunner("sac", 100, "InvertedPendulum-v5"),
+               "somq": compare.OurRunner("somq", None, 100)}
 
     def fingerprint(kind, params):
-        return compare._fingerprint(kind, {"a": 1}, config, 3, [100], params, score)
+        return compare.Plan(config, params, runners).fingerprint(kind, 3, score, {"a": 1})
 
     # TD3 and SAC train and act on the environment's own observations: the scaling estimated at
     # another seed leaves their record valid; somarm's learners see the scaled state, so theirs is not
