@@ -18,6 +18,7 @@ import numpy as np
 from somarm.learners.somq import RESPONSES
 from somarm.reproduce import beyond_figures, metrics
 from somarm.reproduce.common import Context, final_error, fmt, preset_choices, run_group, typical_trial
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
 
@@ -237,20 +238,8 @@ def _diagnosis(trained: Trained) -> list[str]:
     return lines
 
 
-def beyond(ctx: Context) -> Section:
-    """Train and compare both responses on the four tasks; figures, targets and notes.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    trained = train(ctx)
+def report(ctx: Context, trained) -> Section:
+    """Train and compare both responses on the four tasks; figures, targets and notes."""
     results, greedy = trained.results, trained.greedy
     section = Section("beyond", "Beyond the paper: a truly continuous SOM-Q response")
     section.choices += preset_choices("table1+", "table2+", "table5+")
@@ -268,3 +257,6 @@ def beyond(ctx: Context) -> Section:
                            for (task, preset, response), errors in greedy.items() if task != "throw_distance"})
     section.figures += beyond_figures.figures(ctx, results, greedy, trained.profiles, TARGETS)
     return section
+
+
+beyond = Experiment(groups, train, report)

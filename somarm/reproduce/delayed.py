@@ -10,6 +10,7 @@ import numpy as np
 
 from somarm.plots import pyplot
 from somarm.reproduce.common import Context, counted, fmt, preset_choices, run_group
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -176,14 +177,8 @@ def _figure(ctx: Context, trained: Trained):
     return save(ctx, fig, "delayed_reward.png", crop=False)
 
 
-def delayed_reward(ctx: Context) -> Section:
-    """SOM-Q with gamma 0.9 and 0 on reach2_obstacle; greedy success and length; yardsticks.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    trained = train(ctx)
+def report(ctx: Context, trained) -> Section:
+    """SOM-Q with gamma 0.9 and 0 on reach2_obstacle; greedy success and length; yardsticks."""
     config = trained.results[0].config
     params = trained.results[0].task.params
     notes = [
@@ -209,3 +204,6 @@ def delayed_reward(ctx: Context) -> Section:
         notes=notes,
         choices=preset_choices("obstacle"),
     )
+
+
+delayed_reward = Experiment(groups, train, report)

@@ -15,6 +15,7 @@ from somarm.reproduce.common import (
     run_group,
     typical_trial,
 )
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -160,21 +161,9 @@ def _map_figures(ctx: Context, somq: RunResult, switch: int) -> list:
     return [*paths, save(ctx, fig, "fig15_four_goals_action_map.png")]
 
 
-def four_goals(ctx: Context) -> Section:
-    """Figs. 13-15: four goals by quadrant, moved mid-run; SOM-Q against the Motoric Map.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
+def report(ctx: Context, runs) -> Section:
+    """Figs. 13-15: four goals by quadrant, moved mid-run; SOM-Q against the Motoric Map."""
     switch, early = switch_step(ctx), ctx.pick(5000, 500)
-    runs = train(ctx)
     errors = {kind: phase_errors(r.steps, r.block_means, switch, early) for kind, r in runs.items()}
     config = runs["somq"].config
     section = Section("four_goals", f"Figs. 13-15: four goals, moved at t = {switch:,} (Table 2)")
@@ -194,3 +183,6 @@ def four_goals(ctx: Context) -> Section:
     section.figures.append(_curves_figure(ctx, runs, switch))
     section.figures += _map_figures(ctx, runs["somq"], switch)
     return section
+
+
+four_goals = Experiment(groups, train, report)

@@ -6,6 +6,7 @@ import numpy as np
 
 from somarm.plots import pyplot
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import legend_below, log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -117,20 +118,9 @@ def _figure(ctx: Context, results: dict[str, RunResult]):
     return save(ctx, fig, "fig25_more_inputs.png")
 
 
-def more_inputs(ctx: Context) -> Section:
-    """Fig. 25: experiments A to D of Table 6 under Table 7, with the -2 punishment below 45 degrees.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    results, random_error = train(ctx)
+def report(ctx: Context, trained) -> Section:
+    """Fig. 25: experiments A to D of Table 6 under Table 7, with the -2 punishment below 45 degrees."""
+    results, random_error = trained
     mean = {k: float(final_error(r, 100).mean()) for k, r in results.items()}
     config = results["A"].config
     section = Section("more_inputs", "Fig. 25: more varied inputs, experiments A-D (Tables 6 and 7)")
@@ -146,3 +136,6 @@ def more_inputs(ctx: Context) -> Section:
     section.claims += _claims(mean, random_error)
     section.figures.append(_figure(ctx, results))
     return section
+
+
+more_inputs = Experiment(groups, train, report)

@@ -8,6 +8,7 @@ from somarm import plots
 from somarm.learners.schedules import ExponentialDecay
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import legend_below, log_error_axes, save
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
@@ -134,20 +135,8 @@ def _figure(ctx: Context, results: dict[str, RunResult], level: float):
     return save(ctx, fig, "fig24_neighbourhood_q.png")
 
 
-def neighbourhood_q(ctx: Context) -> Section:
-    """Fig. 24: +NL/0.9985, -NL/0.9985 and -NL/0.9997 on throw_distance.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    results = train(ctx)
+def report(ctx: Context, results) -> Section:
+    """Fig. 24: +NL/0.9985, -NL/0.9985 and -NL/0.9997 on throw_distance."""
     finals = {k: float(final_error(r, WINDOW).mean()) for k, r in results.items()}
     level = 1.1 * max(finals["+NL/0.9985"], finals["-NL/0.9997"])
     first = results["+NL/0.9985"]
@@ -169,3 +158,6 @@ def neighbourhood_q(ctx: Context) -> Section:
     section.claims += _claims(finals, reach, level, factor, low, high)
     section.figures.append(_figure(ctx, results, level))
     return section
+
+
+neighbourhood_q = Experiment(groups, train, report)

@@ -9,6 +9,7 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, final_error, fit_circle, fmt, preset_choices, run, typical_trial
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import goal_circle, save, schedule_overlay, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -198,20 +199,8 @@ def _map_figures(ctx: Context, trained: Trained, i: int) -> list:
     return [*paths, save(ctx, fig, "fig10_reach2_action_map.png")]
 
 
-def reach2(ctx: Context) -> Section:
-    """Figs. 7-10: the 2-link arm reaching goals on a circle with Table 1.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    trained = train(ctx)
+def report(ctx: Context, trained) -> Section:
+    """Figs. 7-10: the 2-link arm reaching goals on a circle with Table 1."""
     m = measure(trained)
     config = trained.result.config
     section = Section("reach2", "Figs. 7-10: two-link arm, goals on a circle (Table 1)")
@@ -233,3 +222,6 @@ def reach2(ctx: Context) -> Section:
     section.figures += _curve_figures(ctx, trained.result)
     section.figures += _map_figures(ctx, trained, m["typical"])
     return section
+
+
+reach2 = Experiment(groups, train, report)

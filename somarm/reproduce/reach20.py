@@ -18,6 +18,7 @@ from somarm.reproduce.common import (
     run,
     typical_trial,
 )
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import goal_circle, save, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult, evaluation
@@ -126,20 +127,8 @@ def _figure(ctx: Context, trained: Trained, i: int):
     return save(ctx, fig, "fig11_reach20_postures.png")
 
 
-def reach20(ctx: Context) -> Section:
-    """Fig. 11: the 20-link arm, greedy postures for a sweep of goals.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    trained = train(ctx)
+def report(ctx: Context, trained) -> Section:
+    """Fig. 11: the 20-link arm, greedy postures for a sweep of goals."""
     m = measure(trained.goals, trained.postures, ctx.seed)
     ratio, rho = float(np.median(m["ratios"])), float(np.median(m["rhos"]))
     config = trained.result.config
@@ -166,3 +155,6 @@ def reach20(ctx: Context) -> Section:
     )
     section.figures.append(_figure(ctx, trained, typical_trial(final_error(trained.result, 1000))))
     return section
+
+
+reach20 = Experiment(groups, train, report)

@@ -23,6 +23,10 @@ def groups_of(experiment: Callable[[Context], object]) -> Callable[[Context], di
     """The ``groups`` of an experiment (a function of ``runner.EXPERIMENTS``): its module's, the one
     owner of its trial counts; None for one that declares none, as ``peers``, whose comparisons run
     one seed after another and keep only their numbers, so its memory does not grow with ``--seeds``."""
+    from somarm.reproduce.experiment import Experiment
+
+    if isinstance(experiment, Experiment):
+        return experiment.groups
     return getattr(sys.modules[experiment.__module__], "groups", None)
 
 
@@ -45,6 +49,7 @@ def memory_at_seeds(experiment: Callable[[Context], object], *, quick: bool, see
       ValueError: a run setting the learners refuse outright (one line).
     """
     ctx = Context(out_dir=Path(), quick=quick, seed=seed, progress=False, backend=backend, figures=False)
+    ctx = experiment.context(ctx) if hasattr(experiment, "context") else ctx
     described, per_seed = [], 0.0
     for configs in groups_of(experiment)(ctx).values():
         what, n_bytes = memory_needs([config.resolved() for config in at_seeds(ctx, configs)])

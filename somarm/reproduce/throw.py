@@ -7,6 +7,7 @@ import numpy as np
 from somarm.plots import pyplot
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run, typical_trial
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.run import RunConfig, RunResult
@@ -230,20 +231,8 @@ def _landing_figures(ctx: Context, curve: np.ndarray, slopes: dict) -> list:
     return paths
 
 
-def throw(ctx: Context) -> Section:
-    """Figs. 16-20: a single state, target X = 4, Table 4, 4000 throws.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    result = train(ctx)
+def report(ctx: Context, result) -> Section:
+    """Figs. 16-20: a single state, target X = 4, Table 4, 4000 throws."""
     curve = solution_curve()
     units = result.learner.action_weights[:, :, :]  # (n_trials, 30, 2) in (u_x, u_y)
     spread = unit_spread(units, curve)
@@ -267,3 +256,6 @@ def throw(ctx: Context) -> Section:
     section.figures.append(_action_map_figure(ctx, curve, units[i], i, config.n_steps))
     section.figures += _landing_figures(ctx, curve, slopes)
     return section
+
+
+throw = Experiment(groups, train, report)

@@ -9,6 +9,7 @@ import numpy as np
 from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.figures import save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.reproduce.throw import landing, solution_curve
@@ -141,20 +142,8 @@ def _figure(ctx: Context, n_a: int, fig_no: int, trained: Trained, miss: np.ndar
     return save(ctx, fig, f"fig{fig_no}_throw_maps_na{n_a}.png")
 
 
-def throw_maps(ctx: Context) -> Section:
-    """Figs. 21-23: varied target distance, three trials each with N_A = 25, 50 and 5.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (see ``common.run_group``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    trained = train(ctx)
+def report(ctx: Context, trained) -> Section:
+    """Figs. 21-23: varied target distance, three trials each with N_A = 25, 50 and 5."""
     measured = {n_a: measure(t) for n_a, t in trained.items()}
     config = trained[SIZES[0][0]].result.config
     section = Section("throw_maps", "Figs. 21-23: varied target distance, action neighbourhoods 25, 50, 5")
@@ -170,3 +159,6 @@ def throw_maps(ctx: Context) -> Section:
     section.figures += [_figure(ctx, n_a, fig_no, trained[n_a], measured[n_a]["miss"]) for n_a, fig_no in SIZES]
     section.claims += _claims(measured)
     return section
+
+
+throw_maps = Experiment(groups, train, report)
