@@ -26,6 +26,7 @@ import numpy as np
 from somarm import __version__, tasks
 from somarm.io import atomic_write_json
 from somarm.run import evaluation
+from somarm.tasks import gym_envs
 
 __all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "Plan", "OurRunner", "PeerRunner", "make_plan", "ladder",
            "check", "compare", "peers_missing", "peer_budget", "default_samples", "task_defaults", "run_unit",
@@ -167,7 +168,7 @@ class PeerRunner:
 
     kind: str
     budget: int  #: training samples
-    gym_id: str | None  #: the Gymnasium environment of a ``gym:ID`` task (None: a somarm task's)
+    gym_id: str | None  #: the Gymnasium id of a ``gym:ID`` or ``dmc:`` task (None: a somarm task's)
 
     @property
     def rungs(self) -> list[int]:
@@ -193,7 +194,7 @@ class PeerRunner:
         from somarm.peers.gym import env_id
 
         if self.gym_id:
-            return gymnasium.make(self.gym_id, **_peer_params(params)), self.gym_id + " (its own observations and actions)"
+            return gym_envs.make_env(task, **_peer_params(params)), self.gym_id + " (its own observations and actions)"
         return gymnasium.make(env_id(task), **params), env_id(task) + " (actions in [-1, 1] mapped to the task's box)"
 
     def run(self, plan: Plan, seed: int, score: _Scorer, *, warm_up: bool = False):
@@ -297,14 +298,15 @@ def make_plan(config: CompareConfig) -> Plan:
         raise ValueError(f"unknown learner(s) {', '.join(unknown) or '(none given)'}; allowed: {', '.join(LEARNERS)}")
     check_int("--episodes", config.episodes)
     record = tasks.record(config.task)
-    if record.episodic and not config.task.startswith("gym:"):
+    if record.episodic and not gym_envs.env_task(config.task):
         one_step = [name for name in tasks.names() if not tasks.record(name).episodic]
-        raise ValueError(f"{config.task} has multi-step episodes; compare takes gym:ID and the one-step tasks: "
+        raise ValueError(f"{config.task} has multi-step episodes; compare takes gym:ID, dmc:DOMAIN-TASK and the "
+                         "one-step tasks: "
                          f"{', '.join(one_step)}")
     if any(k in PEERS for k in config.learners) and (reason := peers_missing()):
         raise ValueError(reason)
     params = json.loads(_completed(config.task, json.dumps(config.task_params, sort_keys=True), config.seed))
-    gym_id = config.task[4:] if config.task.startswith("gym:") else None
+    gym_id = gym_envs.env_id_of(config.task) if gym_envs.env_task(config.task) else None
     runners: dict[str, Runner] = {}
     task = tasks.make(config.task, seed=config.seed, **params)
     for kind in config.learners:
@@ -388,7 +390,7 @@ def _peer_params(params: dict[str, Any]) -> dict[str, Any]:
 def default_samples(task: str) -> int:
     """somarm's learners' samples when none are given: a ``gym:ID``'s run length (its benchmark
     preset's steps, which the held-out results use), else 10,000."""
-    if task.startswith("gym:"):
+    if gym_envs.env_task(task):
         return tasks.record(task).n_steps
     return 10_000
 
@@ -398,10 +400,10 @@ def peer_budget(kind: str, config: CompareConfig) -> int:
     covers, else ``samples``."""
     if config.peer_samples:
         return config.peer_samples
-    if config.task.startswith("gym:"):
+    if gym_envs.env_task(config.task):
         from somarm.peers import zoo
 
-        entry = zoo.zoo_entry(kind, config.task[4:])
+        entry = zoo.zoo_entry(kind, gym_envs.env_id_of(config.task))
         if entry is not None:
             return int(entry["n_timesteps"])
     return config.samples

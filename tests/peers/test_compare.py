@@ -55,7 +55,7 @@ def test_the_same_seed_gives_the_same_errors_for_somarm_learners(tmp_path):
     (["reach2", "--learners", "somq,ppo"], "unknown learner(s) ppo; allowed: somq, somq+, motoric, tabular, td3, sac"),
     (["reach20", "--learners", "tabular"], "tabular cannot learn reach20"),
     (["reach3"], "unknown task 'reach3'"),
-    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes gym:ID and the one-step tasks"),
+    (["reach2_obstacle"], "reach2_obstacle has multi-step episodes; compare takes gym:ID, dmc:DOMAIN-TASK and the one-step tasks"),
     (["reach2", "--seeds", "0"], "seeds must be a whole number >= 1"),
 ])
 def test_bad_compare_arguments_end_in_one_line(argv, message, capsys, tmp_path):
@@ -360,3 +360,15 @@ def test_the_benchmarks_report_quotes_the_zoo_as_published_or_says_it_has_nothin
     lines = benchmarks._published(("InvertedPendulum-v5",))
     assert lines[0] == "RL Baselines3 Zoo publishes no TD3 or SAC result for InvertedPendulum-v5."
     assert lines[-1] == "Gymnasium's reward thresholds: InvertedPendulum-v5 950."
+
+
+def test_a_suite_task_is_compared_as_a_gymnasium_environment_with_the_peers_on_the_suites_own_physics():
+    config = compare.CompareConfig(task="dmc:cartpole-balance", learners=("somq", "sac"), samples=200,
+                                   peer_samples=200, seeds=1, episodes=1)
+    plan = compare.make_plan(config)
+    sac = plan.runners["sac"]
+    assert sac.gym_id == "somarm-dmc/cartpole-balance-v0" and sac.budget == 200
+    env, described = sac._env(config.task, plan.params)
+    assert env.unwrapped.domain == "cartpole" and described.startswith("somarm-dmc/cartpole-balance-v0")
+    env.close()
+    assert compare.default_samples("dmc:cartpole-balance") == tasks.record("dmc:cartpole-balance").n_steps
