@@ -7,19 +7,16 @@ Three measurements, each in one run on this machine:
    part alone is above the 100 us target, no glue can meet it.
 2. ``steps``: MuJoCo's CPU per projectile-step (the thread CPU of the native rollouts over the RK4
    steps the throws need) in a training step of 20 and of 100 trials and in a large batch, for the
-   tasks' design (a batch in one model, landed throws leaving: the staircase) beside the chunked
-   design before it (``somarm.benchmarks.flights``); and each step's cost per throw (the
-   flights alone, planned beforehand) as a multiple of the large batch's (the target: 1.5x at 100).
+   tasks' design (a batch in one model, landed throws leaving: the staircase;
+   ``somarm.benchmarks.rollouts`` clocks it), and each step's cost per throw (the flights alone,
+   planned beforehand) as a multiple of the large batch's (the target: 1.5x at 100).
 3. ``paper``: the paper's experiments one after another (lanes as usual, no worker processes), with
    the CPU seconds of every thread spent in MuJoCo's native calls and in the learners' compiled
    kernels. Their sum over the machine's 2 cores is a floor that no scheduling or glue can beat.
-   ``--compare`` runs them a second time with the chunked flights and full-size arm models (the
-   design before), for MuJoCo's CPU side by side.
 
 Usage:
   python scripts/bench_floor.py                   # all three (the paper part takes a few minutes)
   python scripts/bench_floor.py --skip-paper      # the first two only (about a minute)
-  python scripts/bench_floor.py --compare         # the paper part under both designs
   python scripts/bench_floor.py --quick           # reduced sizes and the --quick experiments
 """
 
@@ -42,7 +39,8 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from somarm import tasks  # noqa: E402
-from somarm.benchmarks import best_seconds, flights  # noqa: E402
+from somarm.benchmarks import best_seconds  # noqa: E402
+from somarm.benchmarks.rollouts import RolloutClock  # noqa: E402
 from somarm.learners import somq  # noqa: E402
 from somarm.reproduce import common, runner  # noqa: E402
 from somarm.tasks import arms, flight  # noqa: E402
@@ -99,9 +97,8 @@ def dm_env_floor(episodes: int, repeats: int) -> None:
               f"{'below' if min(floor_us, bare_us) <= 100 else 'ABOVE'} the target")
 
 
-#: The two designs of a batch's flights, each a function of the tasks' plan: landings in flight order.
-DESIGNS = {"staircase": lambda plan: flight._fly(plan, 0.05),
-           "chunked": lambda plan: flights.fly_sorted(plan.flat, 0.05)}
+#: The tasks' design of a batch's flights, a function of their plan: landings in flight order.
+DESIGNS = {"staircase": lambda plan: flight._fly(plan, 0.05)}
 
 
 def _measure(plans, fly, repeats: int) -> tuple[float, float, float]:
@@ -112,7 +109,7 @@ def _measure(plans, fly, repeats: int) -> tuple[float, float, float]:
         fly(plan)
     best = (np.inf, np.inf, np.inf)
     for _ in range(repeats):
-        with flights.RolloutClock() as clock:
+        with RolloutClock() as clock:
             start = time.thread_time()  # CPU, not wall: a busy machine's waits left out
             for plan in plans:
                 fly(plan)
@@ -122,7 +119,7 @@ def _measure(plans, fly, repeats: int) -> tuple[float, float, float]:
 
 
 def step_floor(large: int, steps: int, repeats: int) -> dict[str, dict]:
-    """Part 2: MuJoCo's CPU per projectile-step in both designs, and steps as multiples of a large batch.
+    """Part 2: MuJoCo's CPU per projectile-step, and steps as multiples of a large batch.
 
     Returns:
       Per task, per design and batch size (20, 100, ``large``): ``us_per_projectile_step``,
@@ -131,8 +128,7 @@ def step_floor(large: int, steps: int, repeats: int) -> dict[str, dict]:
     print("training steps and a large batch, one thread: MuJoCo's CPU per projectile-step (its native rollouts "
           "over the RK4 steps the throws need; in brackets the steps MuJoCo took per needed one), and the flights' "
           "CPU per throw as a multiple of the large batch's (target <= 1.5x at 100 trials)")
-    print(f"  {'task':15s} {'throws':>6s}   {'staircase':>16s}   {'chunked':>16s}   {'chunked/staircase':>17s}   "
-          f"{'x large':>7s}")
+    print(f"  {'task':15s} {'throws':>6s}   {'staircase':>16s}   {'x large':>7s}")
     figures: dict[str, dict] = {}
     for name in THROWS:
         t = _throws(name, large, np.random.default_rng(1))
@@ -148,9 +144,7 @@ def step_floor(large: int, steps: int, repeats: int) -> dict[str, dict]:
             f = figures[name][n]
             cells = "   ".join(f"{f[d]['us_per_projectile_step']:6.3f} us ({f[d]['body_steps_per_projectile_step']:4.2f})"
                                for d in DESIGNS)
-            ratio = f["chunked"]["us_per_projectile_step"] / f["staircase"]["us_per_projectile_step"]
-            print(f"  {name:15s} {n:6d}   {cells}   {ratio:16.2f}x   {f['staircase']['us_per_throw'] / big:6.2f}x",
-                  flush=True)
+            print(f"  {name:15s} {n:6d}   {cells}   {f['staircase']['us_per_throw'] / big:6.2f}x", flush=True)
     return figures
 
 
@@ -206,20 +200,6 @@ def _clocked():
         flight.mj_rollout, flight._fly, arms.mujoco, somq._kernels, common.SPLIT_TRIAL_STEPS = saved
 
 
-@contextlib.contextmanager
-def _chunked_design():
-    """Within the block the tasks fly their throws in chunks and their arms in models of the most arms
-    (the design before the staircase and the arm models sized to the batch); the same numbers."""
-    saved = (flight._fly, arms._batch)
-    sized = arms._batch
-    flight._fly = lambda plan, G: flights.fly_sorted(plan.flat, G)
-    arms._batch = lambda n_links, m: sized(n_links, arms._COPIES[n_links])
-    try:
-        yield
-    finally:
-        flight._fly, arms._batch = saved
-
-
 def paper_floor(quick: bool, cores: int, names: tuple[str, ...] = PAPER, label: str = "") -> dict[str, float]:
     """Part 3: the experiments with the CPU seconds of MuJoCo and of the learners' kernels.
 
@@ -259,37 +239,21 @@ def _flights_line(spent: dict[str, float]) -> str:
             f"{spent['flights'] / spent['projectile_steps'] * 1e6:.3f} us each)")
 
 
-def compare_paper(quick: bool, cores: int, names: tuple[str, ...] = PAPER) -> tuple[dict, dict]:
-    """Part 3 under both designs, one after the other, and MuJoCo's CPU of each experiment side by side."""
-    new = paper_floor(quick, cores, names, label=" (the staircase)")
-    with _chunked_design():
-        old = paper_floor(quick, cores, names, label=" (the chunked design)")
-    print("  MuJoCo's CPU, chunked design / staircase: " + ", ".join(
-        f"{name} {old[f'mujoco:{name}'] / new[f'mujoco:{name}']:.2f}x" for name in names if new[f"mujoco:{name}"] > 0)
-        + f"; all {old['mujoco'] / new['mujoco']:.2f}x")
-    return new, old
-
-
 def main(argv: list[str] | None = None) -> int:
     """Print the three parts; 0, or 2 after one line naming a bad option."""
     parser = OneLineParser(prog="bench_floor.py", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes and the --quick experiments")
     parser.add_argument("--skip-paper", action="store_true", help="only the dm_env and training-step parts")
-    parser.add_argument("--compare", action="store_true", help="the paper part under both designs")
     try:
         args = parser.parse_args(argv)
     except ValueError as exc:
-        print(f"bench_floor.py: error: {exc} (allowed: --quick, --skip-paper, --compare)", file=sys.stderr)
+        print(f"bench_floor.py: error: {exc} (allowed: --quick, --skip-paper)", file=sys.stderr)
         return 2
     repeats = 1 if args.quick else 4
     dm_env_floor(episodes=50 if args.quick else 400, repeats=repeats)
     step_floor(large=6000 if args.quick else 60_000, steps=5 if args.quick else 60, repeats=repeats)
     if not args.skip_paper:
-        cores = os.cpu_count() or 2
-        if args.compare:
-            compare_paper(args.quick, cores)
-        else:
-            paper_floor(args.quick, cores)
+        paper_floor(args.quick, os.cpu_count() or 2)
     return 0
 
 

@@ -5,7 +5,7 @@ are evaluated in one batched call through MuJoCo (the default backend) and throu
 analytic backend, in the same run, so their ratio is meaningful on a busy machine. Beside them:
 the largest difference between the two (the landing error for the throws, the fingertip
 error for the arms), for the throws MuJoCo's CPU per projectile-step in the large batch (its
-native rollouts' thread CPU over the RK4 steps the throws need; ``benchmarks.flights``), the
+native rollouts' thread CPU over the RK4 steps the throws need; ``benchmarks.rollouts``), the
 cost of one dm_env episode (``tasks.load``), and the cost of one
 training step (``reset`` + ``step``) of 100 and of 20 trials, which is what an experiment pays,
 also as a multiple of the large batch's cost per evaluation (all measured in the same run).
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from somarm import tasks
-from somarm.benchmarks import flights
+from somarm.benchmarks.rollouts import RolloutClock
 from somarm.io import atomic_write_json
 from somarm.tasks import flight
 from somarm.tasks import throw as throw_module
@@ -105,7 +105,7 @@ def _projectile_step_us(task, observations: np.ndarray, actions: np.ndarray, rep
     needed = float(flight._plan(*throws, G=task.params.G, tolerance=task.params.tolerance, workers=1).flat[-1].sum())
     best = float("inf")
     for _ in range(repeats):
-        with flights.RolloutClock() as clock:
+        with RolloutClock() as clock:
             task.evaluate(observations, actions)
         best = min(best, clock.us_per_projectile_step(needed))
     return best, needed / n

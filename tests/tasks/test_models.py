@@ -73,12 +73,12 @@ def test_launcher_matches_table_3():
 
 def test_arm20_file_is_what_the_generator_writes():
     assert assets.model_path("arm20").read_text() == assets.arm20_xml(), (
-        "models/arm20.xml differs from its generator: run python scripts/make_arm20.py")
+        "models/arm20.xml differs from its generator: run python tools/make_arm20.py")
 
 
 def test_make_arm20_script_check_mode():
     env = {**os.environ, "MUJOCO_GL": "disable"}
-    result = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_arm20.py"), "--check"],
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / "make_arm20.py"), "--check"],
                             capture_output=True, text=True, env=env, timeout=120)
     assert result.returncode == 0, result.stdout + result.stderr
     assert "up to date" in result.stdout

@@ -1,6 +1,6 @@
 """Write models/arm20.xml, the 20-link planar arm of Fig. 11, from somarm.tasks.assets.arm_spec.
 
-Usage: python scripts/make_arm20.py [--check]
+Usage: python tools/make_arm20.py [--check]
   --check  compare the file with a fresh generation instead of writing it (exit 1 if they differ).
 """
 

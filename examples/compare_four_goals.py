@@ -1,6 +1,6 @@
 """SOM-Q against the Motoric Map on the four-goal task (Fig. 13), headless.
 
-    python scripts/compare_four_goals.py --trials 20 --seed 0 --out runs/four_goals
+    python examples/compare_four_goals.py --trials 20 --seed 0 --out runs/four_goals
 
 Writes one run folder per learner and prints the mean error before and after the goals move.
 """

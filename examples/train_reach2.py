@@ -1,6 +1,6 @@
 """Train SOM-Q on the two-link arm (Figs. 7-10) headless; edit the config below and run.
 
-    python scripts/train_reach2.py --trials 20 --steps 50000 --seed 0 --out runs/reach2
+    python examples/train_reach2.py --trials 20 --steps 50000 --seed 0 --out runs/reach2
 
 The logic lives in ``somarm.run``; this script only chooses a configuration.
 """
