@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import re
 import sys
 
@@ -147,37 +146,34 @@ def real_array(name: str, value: object) -> np.ndarray:
 
 
 def _available_memory() -> int | None:
-    """Bytes a new allocation can get: the smaller of the memory free without swapping (Linux
-    ``MemAvailable``) and what the address-space limit (``ulimit -v``, ``RLIMIT_AS``) leaves; or None."""
+    """Bytes a new allocation can get: the smaller of the memory free without swapping (psutil's
+    ``available``: Linux's ``MemAvailable``) and what the address-space limit (``ulimit -v``,
+    ``RLIMIT_AS``) leaves; or None."""
     limits = [n for n in (_free_memory(), _address_space_left()) if n is not None]
     return min(limits) if limits else None
 
 
 def _free_memory() -> int | None:
+    import psutil  # here, not at the top: ``somarm --help`` does not need it
+
     try:
-        with open("/proc/meminfo", encoding="ascii") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (AttributeError, ValueError, OSError):
+        return int(psutil.virtual_memory().available)
+    except (OSError, RuntimeError, AttributeError):
         return None
 
 
 def _address_space_left() -> int | None:
-    """``RLIMIT_AS`` less this process's address space now (``/proc/self/statm``); None without a limit."""
+    """``RLIMIT_AS`` less this process's address space now (psutil's ``vms``); None without a limit."""
     try:
         import resource
+
+        import psutil
 
         limit = resource.getrlimit(resource.RLIMIT_AS)[0]
         if limit == resource.RLIM_INFINITY:
             return None
-        with open("/proc/self/statm", encoding="ascii") as handle:
-            used = int(handle.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (ImportError, OSError, ValueError, IndexError):
+        used = psutil.Process().memory_info().vms
+    except (ImportError, OSError, RuntimeError):
         return None
     return max(0, limit - used)
 
