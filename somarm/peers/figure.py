@@ -30,12 +30,14 @@ def compare_figure(result: dict[str, Any], path: str | Path) -> Path:
     metric = result.get("metric", "error")
     fig, (by_samples, by_time) = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     order = list(NAMES)  # the same legend order in every figure, also when read back from JSON
+    counts = {kind: np.array(data[metric]).shape[1] for kind, data in result["learners"].items()}
+    same = len(set(counts.values())) == 1  # else each learner's legend entry says how many seeds it has
     for kind, data in sorted(result["learners"].items(), key=lambda item: order.index(item[0])):
         errors = np.array(data[metric])  # (rungs, seeds)
         samples = np.array(data["samples"])
         walls = np.median(np.array(data["wall_seconds"]), axis=1)
         median, low, high = np.median(errors, axis=1), errors.min(axis=1), errors.max(axis=1)
-        label = NAMES.get(kind, kind)
+        label = NAMES.get(kind, kind) + ("" if same else f" ({counts[kind]} seeds)")
         for ax, x in ((by_samples, samples), (by_time, walls)):
             ax.plot(x, median, "o-", color=COLOURS.get(kind, "k"), label=label, ms=3)
             ax.fill_between(x, low, high, color=COLOURS.get(kind, "k"), alpha=0.15, lw=0)
@@ -50,5 +52,6 @@ def compare_figure(result: dict[str, Any], path: str | Path) -> Path:
     by_samples.set_ylabel(f"greedy error on {result['observations']} fresh observations" if metric == "error"
                           else f"greedy return per episode ({result['episodes']} fresh episodes at the end)")
     by_samples.legend(fontsize=8)
-    fig.suptitle(f"{result['task']}: median over {len(result['seeds'])} seeds (band: min to max)")
+    over = f"{next(iter(counts.values()))} seeds" if same else "each learner's seeds"
+    fig.suptitle(f"{result['task']}: median over {over} (band: min to max)")
     return save(fig, path)
