@@ -1,7 +1,7 @@
 """``somarm bench learner``: microseconds per trial-step of SOM-Q act + learn, beside the reference.
 
 For the paper's map sizes and n_trials = 1, 20 and 100, the batched, compiled learner
-(``somarm.learners.somq.SOMQ``) and the line-by-line reference (``somarm.learners.reference.ReferenceSOMQ``, one
+(``somarm.learners.somq.SOMQLearner``) and the line-by-line reference (``somarm.learners.reference.ReferenceSOMQ``, one
 trial) run the same number of steps from the same t in the same process, so their ratio is
 meaningful even on a busy machine. Observations are uniform in the box and rewards are uniform
 in [-1, 0): the learner's cost does not depend on where they come from, only on how often the
@@ -18,7 +18,7 @@ import numpy as np
 
 from somarm.learners.presets import get
 from somarm.learners.reference import ReferenceSOMQ
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 from somarm.validation import OneLineParser, check_int, check_int_list, whole_number
 
 __all__ = ["Case", "CASES", "REPRESENTATIONS", "time_batched", "time_reference", "interpolated_rows",
@@ -68,14 +68,14 @@ def _inputs(case: Case, n_trials: int, n_steps: int) -> tuple[np.ndarray, np.nda
 
 
 def time_batched(case: Case, n_trials: int, n_steps: int, *, t0: int = 0) -> float:
-    """Seconds per trial-step of ``SOMQ.act`` + ``learn``, starting at step ``t0``."""
+    """Seconds per trial-step of ``SOMQLearner.act`` + ``learn``, starting at step ``t0``."""
     # Warm up first: numba picks (or loads) a specialisation per array layout, and a batch of one
     # trial has other layouts than a batch of many.
-    warm = SOMQ(case.config, n_trials=n_trials, **_bounds(case))
+    warm = SOMQLearner(case.config, n_trials=n_trials, **_bounds(case))
     for x, r in zip(*_inputs(case, n_trials, 3), strict=True):
         warm.act(x)
         warm.learn(r)
-    learner = SOMQ(case.config, n_trials=n_trials, **_bounds(case))
+    learner = SOMQLearner(case.config, n_trials=n_trials, **_bounds(case))
     learner.t = t0
     observations, rewards = _inputs(case, n_trials, n_steps)
     start = time.perf_counter()

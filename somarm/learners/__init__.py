@@ -14,14 +14,14 @@ from typing import Any
 from somarm.learners.base import LearnerBase, initial_generator
 from somarm.learners.file import read_file
 from somarm.learners.motoric import MotoricConfig, MotoricMap
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 from somarm.learners.tabular import TabularConfig, TabularQ
 
 __all__ = ["LEARNERS", "config_class", "make", "load", "memory_needed", "initial_generator"]
 
 #: kind -> (config class, learner class); the kinds are its keys.
 LEARNERS: dict[str, tuple[type, type[LearnerBase]]] = {
-    "somq": (SOMQConfig, SOMQ),
+    "somq": (SOMQConfig, SOMQLearner),
     "motoric": (MotoricConfig, MotoricMap),
     "tabular": (TabularConfig, TabularQ),
 }

@@ -1,10 +1,9 @@
 """Compiled SOM-Q steps (numba), looping over trials; the random numbers come in from NumPy.
 
-These kernels are the fast path of ``somarm.learners.somq.SOMQ``. They do the same arithmetic in the
+These kernels are the fast path of ``somarm.learners.somq.SOMQLearner``. They do the same arithmetic in the
 same order as ``somarm.learners.reference.ReferenceSOMQ`` (no fastmath), so both give bit-identical
 results. Units whose neighbourhood value is 0 are skipped: their update would add exactly 0.
-They release the GIL (``nogil``), so learners stepped in different threads (the lanes of a
-lockstep group, ``somarm.run.loop``) run side by side.
+They release the GIL (``nogil``), so learners stepped in different threads run side by side.
 
 ``wrap (action_dim,)`` bools mark the action dimensions treated as circles (``periodic_actions``):
 there the box's low and high are one point, actions wrap round instead of being clipped, and the

@@ -89,7 +89,7 @@ class MotoricConfig(ConfigBase):
 class MotoricMap(MapLearner):
     """The Motoric Map for ``n_trials`` independent trials (conforms to ``somarm.protocols.Learner``).
 
-    Same keywords and verbs as ``somarm.learners.somq.SOMQ``. ``action_weights`` is
+    Same keywords and verbs as ``somarm.learners.somq.SOMQLearner``. ``action_weights`` is
     ``(n_trials, n_input_units, action_dim)`` (one private action per input unit), ``values`` is
     ``(n_trials, n_input_units)``, and ``action_grid`` is the input grid.
     """

@@ -1,6 +1,6 @@
 """SOM-Q for one trial, written step by step as in section 4 of the paper (kept for tests and readers).
 
-This is the slow, plain version the batched, compiled learner (``somarm.learners.somq.SOMQ``) is tested
+This is the slow, plain version the batched, compiled learner (``somarm.learners.somq.SOMQLearner``) is tested
 against: given the same seed and trial index it must produce bit-identical maps, Q-table and
 actions. It draws exactly the same random numbers in exactly the same way: one row per step
 from the trial's ``UniformStreams`` row, laid out as
@@ -137,7 +137,7 @@ def interpolated_response(x, input_weights, action_weights, q, tie, distances_a,
 
 
 class ReferenceSOMQ:
-    """One SOM-Q agent, step by step. Same constructor keywords as ``SOMQ`` but a single trial.
+    """One SOM-Q agent, step by step. Same constructor keywords as ``SOMQLearner`` but a single trial.
 
     Args:
       config: the learner's parameters.

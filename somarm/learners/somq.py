@@ -39,7 +39,7 @@ from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import grid_coordinates, grid_offsets, winners
 from somarm.validation import check_number
 
-__all__ = ["RESPONSES", "ACTION_INITS", "SOMQConfig", "SOMQ", "row_width", "grid_actions"]
+__all__ = ["RESPONSES", "ACTION_INITS", "SOMQConfig", "SOMQLearner", "row_width", "grid_actions"]
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
@@ -180,7 +180,7 @@ def row_width(config: SOMQConfig, action_dim: int) -> int:
     return 3 + action_dim * (2 if config.noise == "gaussian" else 1)
 
 
-class SOMQ(MapLearner):
+class SOMQLearner(MapLearner):
     """SOM-Q for ``n_trials`` independent trials (conforms to ``somarm.protocols.Learner``).
 
     Args:

@@ -4,7 +4,7 @@ from somq_cases import small_config
 
 from somarm.learners import grouping
 from somarm.learners.schedules import InverseDecay, Schedule
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 
 BOX4 = dict(observation_low=[0.0, -1.0, 0.0, -2.0], observation_high=[1.0, 1.0, 2.0, 2.0],
             action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
@@ -29,7 +29,7 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
     paper = small_config((3, 4), neighbourhood_q, gamma)
     grouped = paper.with_changes({"input_groups": "0,1,2,3"})
     assert grouped.grouped and not paper.grouped
-    a, b = SOMQ(paper, n_trials=2, seed=3, **BOX4), SOMQ(grouped, n_trials=2, seed=3, **BOX4)
+    a, b = SOMQLearner(paper, n_trials=2, seed=3, **BOX4), SOMQLearner(grouped, n_trials=2, seed=3, **BOX4)
     np.testing.assert_array_equal(a.input_weights, b.input_weights)
     _drive(a, 120)
     _drive(b, 120)
@@ -44,8 +44,8 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
                                      {"input_groups": "0,2;1,3", "k_nearest": 2, "response": "interpolated"}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
-    batch = SOMQ(config, n_trials=3, seed=9, **BOX4)
-    alone = SOMQ(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
+    batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
+    alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
     _drive(batch, 80)
     _drive(alone, 80)
     for name in ("input_weights", "action_weights", "q"):
@@ -71,14 +71,14 @@ def test_a_bad_grouping_is_refused_in_one_line(text, match):
 
 def test_a_dimension_the_observation_lacks_is_named():
     with pytest.raises(ValueError, match=r"dimension\(s\) 7, but the observation has 4"):
-        SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="0,7"), **BOX4)
+        SOMQLearner(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="0,7"), **BOX4)
     with pytest.raises(ValueError, match="k_nearest must be"):
         SOMQConfig(k_nearest=0)
 
 
 def test_k_nearest_weights_are_tapered_and_sum_to_one():
     config = SOMQConfig(input_shape=(4,), action_shape=(2,), k_nearest=2, lambda_s=0.0)
-    learner = SOMQ(config, observation_low=[0.0], observation_high=[3.0], action_low=[0.0], action_high=[1.0])
+    learner = SOMQLearner(config, observation_low=[0.0], observation_high=[3.0], action_low=[0.0], action_high=[1.0])
     learner.input_weights[0, :, 0] = [0.0, 1.0, 2.0, 3.0]
     learner.act([[1.25]])  # nearest 1 (0.25), 2 (0.75), then 0 (1.25): 1/0.25 - 1/1.25 = 3.2, 1/0.75 - 0.8
     expected = np.array([3.2, 1 / 0.75 - 0.8])
@@ -90,7 +90,7 @@ def test_k_nearest_weights_are_tapered_and_sum_to_one():
 
 
 def test_tables_start_at_a_share_of_q_init_so_the_sum_starts_at_it():
-    learner = SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="singles", q_init=8.0), **BOX4)
+    learner = SOMQLearner(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="singles", q_init=8.0), **BOX4)
     assert learner.q.shape == (1, 12, 3) and np.all(learner.q == 2.0)
     assert learner.input_weights.shape == (1, 12, 1)
 
@@ -98,10 +98,10 @@ def test_tables_start_at_a_share_of_q_init_so_the_sum_starts_at_it():
 def test_interpolated_response_moves_to_the_top_of_the_parabola():
     config = SOMQConfig(input_shape=(1,), action_shape=(5,), input_groups="singles", response="interpolated",
                         action_init="grid", p=0.0, epsilon=0.0)
-    learner = SOMQ(config, observation_low=[0.0], observation_high=[1.0], action_low=[-1.0], action_high=[1.0])
+    learner = SOMQLearner(config, observation_low=[0.0], observation_high=[1.0], action_low=[-1.0], action_high=[1.0])
     learner.q[0, 0] = [0.0, 1.0, 2.0, 1.5, 0.0]  # unit 2 (at 0); parabola through 1, 2, 1.5 tops at +0.1 steps
     np.testing.assert_allclose(learner.predict([[0.3]]), [[0.5 * (1.0 - 1.5) / (1.0 - 4.0 + 1.5) * 0.5]])
-    plain = SOMQ(config.with_changes({"response": "winner"}), observation_low=[0.0], observation_high=[1.0],
+    plain = SOMQLearner(config.with_changes({"response": "winner"}), observation_low=[0.0], observation_high=[1.0],
                  action_low=[-1.0], action_high=[1.0])
     plain.q[...] = learner.q
     np.testing.assert_array_equal(plain.predict([[0.3]]), [[0.0]])
@@ -109,11 +109,11 @@ def test_interpolated_response_moves_to_the_top_of_the_parabola():
 
 def test_save_and_load_continue_exactly(tmp_path):
     config = small_config((3,), True, 0.5).with_changes({"input_groups": "pairs", "k_nearest": 2})
-    a = SOMQ(config, n_trials=2, seed=4, **BOX4)
+    a = SOMQLearner(config, n_trials=2, seed=4, **BOX4)
     _drive(a, 30)
     a.act(np.full((2, 4), 0.5))
     a.save(tmp_path / "l.npz")
-    b = SOMQ.load(tmp_path / "l.npz")
+    b = SOMQLearner.load(tmp_path / "l.npz")
     for learner in (a, b):
         learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
         _drive(learner, 10)
@@ -129,7 +129,7 @@ def _planted_sum(input_groups, steps, seed):
         input_shape=(2,), action_shape=(2, 2), action_init="grid", grid_span=0.5, alpha=Schedule(0.5),
         lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
         p=Schedule(1.0, InverseDecay(500.0), 0.1), epsilon=Schedule(0.0), input_groups=input_groups)
-    learner = SOMQ(config, n_trials=4, seed=seed, observation_low=[0.0, 0.0], observation_high=[1.0, 1.0],
+    learner = SOMQLearner(config, n_trials=4, seed=seed, observation_low=[0.0, 0.0], observation_high=[1.0, 1.0],
                    action_low=[-1.0, -1.0], action_high=[1.0, 1.0])
     learner.input_weights[:] = np.array([[0.25], [0.75], [0.25], [0.75]]) if input_groups == "singles" else (
         np.array([[0.25, 0.25], [0.75, 0.75]]))
@@ -154,7 +154,7 @@ def test_maps_whose_values_add_solve_two_independent_problems_one_map_of_two_uni
 
 def test_a_growing_map_starts_at_two_by_two_and_grows_to_its_bound_a_row_or_column_at_a_time():
     config = small_config((3, 4), True, 0.0).with_changes({"grow_every": 10, "input_groups": "0,1;2,3"})
-    learner = SOMQ(config, n_trials=2, seed=1, **BOX4)
+    learner = SOMQLearner(config, n_trials=2, seed=1, **BOX4)
     np.testing.assert_array_equal(learner._shapes, np.full((2, 2, 2), 2))
     _drive(learner, 10)
     assert np.all(learner._shapes.prod(axis=2) == 6)  # one row or one column more
@@ -183,8 +183,8 @@ def test_growth_inserts_the_mean_of_the_two_units_beside_the_largest_error():
 @pytest.mark.parametrize("grow_every", [0, 7])
 def test_a_growing_trial_alone_equals_the_same_trial_in_a_batch(grow_every):
     config = small_config((3, 3), True, 0.5).with_changes({"grow_every": grow_every, "k_nearest": 2})
-    batch = SOMQ(config, n_trials=3, seed=2, **BOX4)
-    alone = SOMQ(config, n_trials=1, seed=2, trial_ids=[1], **BOX4)
+    batch = SOMQLearner(config, n_trials=3, seed=2, **BOX4)
+    alone = SOMQLearner(config, n_trials=1, seed=2, trial_ids=[1], **BOX4)
     _drive(batch, 60)
     _drive(alone, 60)
     for name in ("input_weights", "action_weights", "q", "_shapes"):
@@ -198,7 +198,7 @@ def test_the_memory_check_before_a_task_is_built_takes_index_lists_beyond_its_lo
     from somarm.learners import presets, somq
 
     config = dataclasses.replace(presets.get("invertedpendulum"), input_groups="1,3;0,2")
-    what, n_bytes = somq.SOMQ.memory_needed(config, n_trials=2, obs_dim=1, action_dim=1)
+    what, n_bytes = somq.SOMQLearner.memory_needed(config, n_trials=2, obs_dim=1, action_dim=1)
     assert "2 input map(s)" in what and n_bytes > 0
 
 
@@ -206,8 +206,8 @@ def test_grouped_maps_say_they_have_no_one_input_map_to_draw_and_a_run_folder_is
     from somarm import run
     from somarm.run import RunConfig
 
-    learner = SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="pairs"), **BOX4)
-    assert not learner.has_maps and SOMQ(SOMQConfig(), **BOX4).has_maps
+    learner = SOMQLearner(SOMQConfig(input_shape=(3,), action_shape=(3,), input_groups="pairs"), **BOX4)
+    assert not learner.has_maps and SOMQLearner(SOMQConfig(), **BOX4).has_maps
     result = run.train(RunConfig(task="reach2", n_trials=1, n_steps=50, block=25, seed=1,
                                  overrides={"input_groups": "singles", "input_shape": (3, 3)}), progress=False)
     run.write(result, tmp_path / "run")  # with the figures

@@ -9,7 +9,7 @@ from somq_cases import arc as _arc
 
 from somarm.learners import interpolation
 from somarm.learners.reference import ReferenceSOMQ, interpolated_response
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 
 BOX1 = dict(observation_low=[0.0], observation_high=[3.0], action_low=[-1.0, -1.0], action_high=[1.0, 1.0])
 
@@ -19,7 +19,7 @@ def _planted(**changes):
     settings = dict(input_shape=(4,), action_shape=(5,), alpha=0.5, lambda_s=0.0, lambda_a=0.5, n_s=0.0,
                     n_a=1.0, p=0.0, epsilon=0.0, response="interpolated")
     config = SOMQConfig(**{**settings, **changes})
-    learner = SOMQ(config, **BOX1)
+    learner = SOMQLearner(config, **BOX1)
     learner.input_weights[0] = [[0.0], [1.0], [2.0], [3.0]]
     learner.action_weights[0] = [[-1.0, 0.0], [-0.5, 0.25], [0.0, 0.5], [0.5, 0.5], [1.0, -1.0]]
     learner.q[0] = -1.0
@@ -53,7 +53,7 @@ def test_response_is_continuous_where_the_mapping_is():
     response = learner.predict(x)[0]
     assert np.abs(np.diff(response, axis=0)).max() < 0.01  # steps of 0.001 in x, slopes below 10
     winner = dataclasses.replace(learner.config, response="winner")
-    jumps = SOMQ(winner, **BOX1)
+    jumps = SOMQLearner(winner, **BOX1)
     for name in ("input_weights", "action_weights", "q"):
         getattr(jumps, name)[...] = getattr(learner, name)
     assert np.abs(np.diff(jumps.predict(x)[0], axis=0)).max() >= 0.5  # the paper's response jumps
@@ -112,7 +112,7 @@ def test_batched_equals_reference_exactly(input_shape, neighbourhood_q, gamma, n
     config = dataclasses.replace(_config(input_shape, neighbourhood_q, gamma, noise), periodic_actions=periodic)
     # With circles, action dimensions 0 and 2 wrap round (their low and high are one point).
     angles = [True, False, True] if periodic else None
-    batched = SOMQ(config, n_trials=3, seed=5, action_periodic=angles, **BOUNDS)
+    batched = SOMQLearner(config, n_trials=3, seed=5, action_periodic=angles, **BOUNDS)
     references = [ReferenceSOMQ(config, seed=5, trial_id=i, action_periodic=angles, **BOUNDS) for i in range(3)]
     rng = np.random.default_rng(7)
     observations = rng.uniform([0, -1], [1, 1], (3, 2))
@@ -150,8 +150,8 @@ def test_batched_equals_reference_exactly(input_shape, neighbourhood_q, gamma, n
 
 def test_trial_alone_equals_trial_in_batch_and_resume_equals_uninterrupted(tmp_path):
     config = _config((6,), True, 0.0)
-    batch = SOMQ(config, n_trials=4, seed=3, **BOUNDS)
-    alone = SOMQ(config, n_trials=1, seed=3, trial_ids=[2], **BOUNDS)
+    batch = SOMQLearner(config, n_trials=4, seed=3, **BOUNDS)
+    alone = SOMQLearner(config, n_trials=1, seed=3, trial_ids=[2], **BOUNDS)
     rng = np.random.default_rng(0)
     for step in range(60):
         x = rng.uniform([0, -1], [1, 1], (4, 2))
@@ -159,7 +159,7 @@ def test_trial_alone_equals_trial_in_batch_and_resume_equals_uninterrupted(tmp_p
         np.testing.assert_array_equal(alone.act(x[2:3]), a[2:3])
         if step == 30:  # save and reload between act and learn
             alone.save(tmp_path / "alone.npz")
-            alone = SOMQ.load(tmp_path / "alone.npz")
+            alone = SOMQLearner.load(tmp_path / "alone.npz")
             assert alone.config.response == "interpolated"
         r = -np.abs(a).sum(axis=1)
         batch.learn(r)
@@ -212,14 +212,14 @@ def _without(path, name, out):
 def test_a_file_saved_before_shifted_existed_still_loads_and_resumes(tmp_path):
     config = _config((6,), True, 0.0)
     config = dataclasses.replace(config, response="winner")
-    whole = SOMQ(config, n_trials=2, seed=5, **BOUNDS)
+    whole = SOMQLearner(config, n_trials=2, seed=5, **BOUNDS)
     rng = np.random.default_rng(1)
     observations = rng.uniform([0, -1], [1, 1], (40, 2, 2))
     for x in observations[:20]:
         whole.learn(-np.abs(whole.act(x)).sum(axis=1))
     whole.act(observations[20])  # saved between act and learn
     whole.save(tmp_path / "new.npz")
-    old = SOMQ.load(_without(tmp_path / "new.npz", "_shifted", tmp_path / "old.npz"))
+    old = SOMQLearner.load(_without(tmp_path / "new.npz", "_shifted", tmp_path / "old.npz"))
     assert not old._shifted.any()
     for learner in (whole, old):
         learner.learn(-np.abs(learner._actions).sum(axis=1))
@@ -230,5 +230,5 @@ def test_a_file_saved_before_shifted_existed_still_loads_and_resumes(tmp_path):
     # A file that lacks an array every learner has is damaged: one line naming the file and the array.
     damaged = _without(tmp_path / "new.npz", "q", tmp_path / "damaged.npz")
     with pytest.raises(ValueError, match=r"damaged\.npz is a damaged learner file: array 'q' is missing$") as err:
-        SOMQ.load(damaged)
+        SOMQLearner.load(damaged)
     assert "\n" not in str(err.value)

@@ -3,7 +3,7 @@ import pytest
 
 from somarm import learners
 from somarm.learners.motoric import MotoricConfig, MotoricMap
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 
 BOX = dict(observation_low=[0.0, 0.0], observation_high=[1.0, 1.0], action_low=[0.0], action_high=[2.0])
 
@@ -11,7 +11,7 @@ BOX = dict(observation_low=[0.0, 0.0], observation_high=[1.0, 1.0], action_low=[
 def test_registry():
     from somarm.learners.tabular import TabularConfig, TabularQ
 
-    assert learners.LEARNERS == {"somq": (SOMQConfig, SOMQ), "motoric": (MotoricConfig, MotoricMap),
+    assert learners.LEARNERS == {"somq": (SOMQConfig, SOMQLearner), "motoric": (MotoricConfig, MotoricMap),
                                  "tabular": (TabularConfig, TabularQ)}
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from somarm.learners import presets
-from somarm.learners.somq import SOMQ, SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 from somarm.run import RunConfig, make
 
 PI = np.pi
@@ -19,7 +19,7 @@ def _one_unit(periodic_actions=True, **changes):
     """One input unit, two action units: unit 0 (greedy) at angle 3.0, near the box's +pi edge."""
     settings = dict(input_shape=(1,), action_shape=(2,), alpha=0.5, lambda_s=0.0, lambda_a=1.0, n_s=0.0,
                     n_a=0.0, p=0.0, epsilon=0.5, periodic_actions=periodic_actions)
-    learner = SOMQ(SOMQConfig(**{**settings, **changes}), action_periodic=ANGLE, **BOX)
+    learner = SOMQLearner(SOMQConfig(**{**settings, **changes}), action_periodic=ANGLE, **BOX)
     learner.input_weights[0] = [[1.0]]
     learner.action_weights[0] = [[3.0, 0.9], [0.0, 0.1]]
     learner.q[0] = [[-0.5, -1.0]]
@@ -55,7 +55,7 @@ def _two_sides(periodic_actions=True, **changes):
     """Four input units at 0..3 whose greedy action units 0, 1, 2, 3 sit at 3.0, -3.0, -2.0, -1.0 rad."""
     settings = dict(input_shape=(4,), action_shape=(4,), alpha=0.5, lambda_s=0.0, lambda_a=0.5, n_s=0.0,
                     n_a=1.0, p=0.0, epsilon=0.0, response="interpolated", periodic_actions=periodic_actions)
-    learner = SOMQ(SOMQConfig(**{**settings, **changes}), action_periodic=ANGLE, **BOX)
+    learner = SOMQLearner(SOMQConfig(**{**settings, **changes}), action_periodic=ANGLE, **BOX)
     learner.input_weights[0] = [[0.0], [1.0], [2.0], [3.0]]
     learner.action_weights[0] = [[3.0, 0.5], [-3.0, 0.5], [-2.0, 0.5], [-1.0, 0.5]]
     learner.q[0] = -1.0 + 1.0 * np.eye(4)
@@ -89,8 +89,8 @@ def test_the_setting_is_off_by_default_and_a_declaration_alone_changes_nothing()
         assert presets.get(name).periodic_actions is False
     assert presets.get("table1+").periodic_actions is True and presets.get("table2+").periodic_actions is True
     config = SOMQConfig(input_shape=(3,), action_shape=(5,), epsilon=0.8)
-    declared = SOMQ(config, n_trials=2, seed=4, action_periodic=ANGLE, **BOX)
-    plain = SOMQ(config, n_trials=2, seed=4, **BOX)
+    declared = SOMQLearner(config, n_trials=2, seed=4, action_periodic=ANGLE, **BOX)
+    plain = SOMQLearner(config, n_trials=2, seed=4, **BOX)
     rng = np.random.default_rng(0)
     clipped = 0
     for _ in range(200):
@@ -121,8 +121,8 @@ def _config(response):
 
 @pytest.mark.parametrize("response", ["winner", "interpolated"])
 def test_trial_alone_equals_trial_in_batch_and_a_saved_learner_keeps_its_circles(tmp_path, response):
-    batch = SOMQ(_config(response), n_trials=3, seed=2, action_periodic=ANGLE, **BOX)
-    alone = SOMQ(_config(response), n_trials=1, seed=2, trial_ids=[1], action_periodic=ANGLE, **BOX)
+    batch = SOMQLearner(_config(response), n_trials=3, seed=2, action_periodic=ANGLE, **BOX)
+    alone = SOMQLearner(_config(response), n_trials=1, seed=2, trial_ids=[1], action_periodic=ANGLE, **BOX)
     rng = np.random.default_rng(3)
     crossed = 0
     for step in range(80):
@@ -131,7 +131,7 @@ def test_trial_alone_equals_trial_in_batch_and_a_saved_learner_keeps_its_circles
         np.testing.assert_array_equal(alone.act(x[1:2]), a[1:2])
         if step == 40:  # save and reload between act and learn
             alone.save(tmp_path / "alone.npz")
-            alone = SOMQ.load(tmp_path / "alone.npz")
+            alone = SOMQLearner.load(tmp_path / "alone.npz")
             assert alone.config.periodic_actions and alone.action_periodic.tolist() == ANGLE
         before = batch.action_weights[..., 0].copy()
         r = -np.abs(np.sin(a[:, 0] - x[:, 0]))
@@ -154,21 +154,21 @@ def _rewrite_meta(path, out, change):
 
 
 def test_a_file_saved_before_periodic_dimensions_loads_with_none_and_a_bad_one_is_named(tmp_path):
-    learner = SOMQ(_config("winner"), action_periodic=ANGLE, **BOX)
+    learner = SOMQLearner(_config("winner"), action_periodic=ANGLE, **BOX)
     learner.save(tmp_path / "new.npz")
-    old = SOMQ.load(_rewrite_meta(tmp_path / "new.npz", tmp_path / "old.npz", lambda m: m.pop("periodic")))
+    old = SOMQLearner.load(_rewrite_meta(tmp_path / "new.npz", tmp_path / "old.npz", lambda m: m.pop("periodic")))
     assert old.action_periodic.tolist() == [False, False] and not old._wrap.any()
     bad = _rewrite_meta(tmp_path / "new.npz", tmp_path / "bad.npz", lambda m: m.update(periodic=[1, 0, 1]))
     with pytest.raises(ValueError, match=r"bad\.npz is a damaged learner file: action_periodic must be 2 "
                                          r"booleans") as err:
-        SOMQ.load(bad)
+        SOMQLearner.load(bad)
     assert "\n" not in str(err.value)
 
 
 @pytest.mark.parametrize("make_learner, match", [
-    (lambda: SOMQ(SOMQConfig(), action_periodic=[True], **BOX),
+    (lambda: SOMQLearner(SOMQConfig(), action_periodic=[True], **BOX),
      r"^action_periodic must be 2 booleans \(one per action dimension\), got \[True\]$"),
-    (lambda: SOMQ(SOMQConfig(), action_periodic=[1, 0], **BOX), "^action_periodic must be 2 booleans"),
+    (lambda: SOMQLearner(SOMQConfig(), action_periodic=[1, 0], **BOX), "^action_periodic must be 2 booleans"),
     (lambda: SOMQConfig(periodic_actions="yes"), "^periodic_actions must be True or False, got 'yes'$"),
     (lambda: SOMQConfig().with_overrides({"periodic_actions": "maybe"}),
      "^periodic_actions=maybe: periodic_actions must be true or false, got 'maybe'$"),

@@ -9,11 +9,11 @@ from somq_cases import arc as _arc
 from somq_cases import small_config as _config
 
 from somarm.learners.reference import ReferenceSOMQ
-from somarm.learners.somq import SOMQ
+from somarm.learners.somq import SOMQLearner
 
 
 def _run_both(config, *, n_trials=3, n_steps=150, seed=11, bounds=BOUNDS):
-    batched = SOMQ(config, n_trials=n_trials, seed=seed, **bounds)
+    batched = SOMQLearner(config, n_trials=n_trials, seed=seed, **bounds)
     references = [ReferenceSOMQ(config, seed=seed, trial_id=i, **bounds) for i in range(n_trials)]
     rng = np.random.default_rng(123)
     observations = rng.uniform([0, -1], [1, 1], (n_trials, 2))
@@ -78,7 +78,7 @@ PERIODIC = [True, False, True]
 @pytest.mark.parametrize("noise", ["uniform", "gaussian"])
 def test_periodic_actions_equal_reference_exactly(noise):
     config = dataclasses.replace(_config((5,), True, 0.0, noise=noise), periodic_actions=True)
-    batched = SOMQ(config, n_trials=3, seed=2, action_periodic=PERIODIC, **BOUNDS)
+    batched = SOMQLearner(config, n_trials=3, seed=2, action_periodic=PERIODIC, **BOUNDS)
     references = [ReferenceSOMQ(config, seed=2, trial_id=i, action_periodic=PERIODIC, **BOUNDS) for i in range(3)]
     rng = np.random.default_rng(5)
     wrapped = 0
@@ -107,7 +107,7 @@ def test_optimistic_start_and_grid_actions_equal_reference_exactly(response):
     bounds = dict(BOUNDS, action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
     config = dataclasses.replace(_config((3, 2), True, 0.9), action_shape=(3, 3), action_init="grid", q_init=2.0,
                                  response=response)
-    fresh = SOMQ(config, n_trials=3, seed=11, **bounds)
+    fresh = SOMQLearner(config, n_trials=3, seed=11, **bounds)
     np.testing.assert_array_equal(fresh.action_weights[2], [[-1, 0], [-1, 0.5], [-1, 1], [0, 0], [0, 0.5], [0, 1],
                                                             [1, 0], [1, 0.5], [1, 1]])
     assert (fresh.q == 2.0).all()
@@ -123,7 +123,7 @@ def test_a_grid_over_part_of_the_box_equals_reference_exactly():
     bounds = dict(BOUNDS, action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
     config = dataclasses.replace(_config((3, 2), True, 0.9), action_shape=(3, 3), action_init="grid",
                                  grid_span=0.5, q_init=2.0)
-    np.testing.assert_allclose(SOMQ(config, seed=1, **bounds).action_weights[0, [0, 8]], [[-0.5, 0.25], [0.5, 0.75]])
+    np.testing.assert_allclose(SOMQLearner(config, seed=1, **bounds).action_weights[0, [0, 8]], [[-0.5, 0.25], [0.5, 0.75]])
     batched, references = _run_both(config, bounds=bounds, n_steps=100)
     for i, ref in enumerate(references):
         np.testing.assert_array_equal(batched.action_weights[i], ref.action_weights)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
-from somarm.learners.somq import SOMQ, SOMQConfig, grid_actions
+from somarm.learners.somq import SOMQConfig, SOMQLearner, grid_actions
 from somarm.protocols import Learner
 
 BOX1 = dict(observation_low=[0.0], observation_high=[3.0], action_low=[0.0, 0.0], action_high=[1.0, 1.0])
@@ -16,7 +16,7 @@ def _planted(neighbourhood_q=True):
     """Three input units at 0, 1, 2; three action units on the diagonal; constant rates 0.5, widths 1."""
     config = SOMQConfig(input_shape=(3,), action_shape=(3,), alpha=0.5, lambda_s=0.5, lambda_a=0.5, n_s=1.0,
                         n_a=1.0, p=0.0, epsilon=0.0, neighbourhood_q=neighbourhood_q)
-    learner = SOMQ(config, **BOX1)
+    learner = SOMQLearner(config, **BOX1)
     learner.input_weights[0] = [[0.0], [1.0], [2.0]]
     learner.action_weights[0] = [[0.0, 0.0], [0.5, 0.5], [1.0, 1.0]]
     learner.q[0] = -1.0
@@ -53,7 +53,7 @@ def test_no_improvement_leaves_action_map_and_no_nl_moves_only_the_winning_pair(
 
 
 def test_delayed_reward_bootstraps_from_next_winner_and_terminal_does_not():
-    learner = SOMQ(
+    learner = SOMQLearner(
         SOMQConfig(input_shape=(3,), action_shape=(3,), alpha=1.0, lambda_s=0.0, lambda_a=0.0, n_s=0.0,
                    n_a=0.0, p=0.0, epsilon=0.0, gamma=0.5, neighbourhood_q=False), **BOX1)
     learner.input_weights[0] = [[0.0], [1.0], [2.0]]
@@ -73,7 +73,7 @@ def test_delayed_reward_bootstraps_from_next_winner_and_terminal_does_not():
 
 def test_exploration_picks_random_units_and_noise_stays_in_bounds():
     config = SOMQConfig(input_shape=(2,), action_shape=(6,), p=1.0, epsilon=5.0)
-    learner = SOMQ(config, n_trials=50, seed=2, **BOX2)
+    learner = SOMQLearner(config, n_trials=50, seed=2, **BOX2)
     seen, actions = set(), []
     for _ in range(20):
         actions.append(learner.act(np.full((50, 2), 0.5)))
@@ -87,7 +87,7 @@ def test_exploration_picks_random_units_and_noise_stays_in_bounds():
 def _greedy_error_single_state(steps):
     config = SOMQConfig(input_shape=(1,), action_shape=(5,)).with_overrides(
         {"decay": "inv:200", "n_a": "2", "epsilon": "0.2", "p": "0.5"})
-    learner = SOMQ(config, n_trials=10, seed=3, observation_low=[0], observation_high=[1],
+    learner = SOMQLearner(config, n_trials=10, seed=3, observation_low=[0], observation_high=[1],
                    action_low=[0, 0], action_high=[1, 1])
     best, x = np.array([0.3, 0.7]), np.zeros((10, 1))
     before = np.linalg.norm(learner.predict(x) - best, axis=1)
@@ -106,7 +106,7 @@ def test_known_optimum_state_to_action_mapping():
     """Learn a = 0.25 + 0.5 x over x in [0, 1]: the greedy error over a grid must fall below 0.05."""
     config = SOMQConfig(input_shape=(10,), action_shape=(10,)).with_overrides(
         {"decay": "inv:500", "n_s": "3", "n_a": "3", "epsilon": "0.3", "p": "0.5"})
-    learner = SOMQ(config, n_trials=10, seed=1, observation_low=[0], observation_high=[1], action_low=[0],
+    learner = SOMQLearner(config, n_trials=10, seed=1, observation_low=[0], observation_high=[1], action_low=[0],
                    action_high=[1])
     rng = np.random.default_rng(0)
     grid = np.broadcast_to(np.linspace(0, 1, 101)[None, :, None], (10, 101, 1))
@@ -133,7 +133,7 @@ def _run(learner, n_steps, seed=0, start=0):
 
 
 def test_determinism_and_seeds():
-    a, b, c = (SOMQ(SOMQConfig(input_shape=(3, 3), action_shape=(4,)), n_trials=2, seed=s, **BOX2)
+    a, b, c = (SOMQLearner(SOMQConfig(input_shape=(3, 3), action_shape=(4,)), n_trials=2, seed=s, **BOX2)
                for s in (5, 5, 6))
     ra, rb, rc = _run(a, 30), _run(b, 30), _run(c, 30)
     np.testing.assert_array_equal(ra, rb)
@@ -144,8 +144,8 @@ def test_determinism_and_seeds():
 
 def test_trial_alone_equals_trial_in_batch():
     config = SOMQConfig(input_shape=(4, 2), action_shape=(5,), noise="gaussian")
-    batch = SOMQ(config, n_trials=5, seed=9, **BOX2)
-    alone = SOMQ(config, n_trials=1, seed=9, trial_ids=[3], **BOX2)
+    batch = SOMQLearner(config, n_trials=5, seed=9, **BOX2)
+    alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[3], **BOX2)
     rng = np.random.default_rng(1)
     for _ in range(60):
         x = rng.random((5, 2))
@@ -162,13 +162,13 @@ def test_trial_alone_equals_trial_in_batch():
 def test_save_load_round_trip(tmp_path, mid_step):
     config = SOMQConfig(input_shape=(3, 2), action_shape=(4,), gamma=0.5,
                         epsilon=Schedule(0.2, ExponentialDecay(0.99), floor=0.01))
-    learner = SOMQ(config, n_trials=3, seed=4, trial_ids=[4, 0, 9], **BOX2)
+    learner = SOMQLearner(config, n_trials=3, seed=4, trial_ids=[4, 0, 9], **BOX2)
     _run(learner, 400)
     if mid_step:
         learner.act(np.full((3, 2), 0.25))
     path = tmp_path / "learner.npz"
     learner.save(path)
-    loaded = SOMQ.load(path)
+    loaded = SOMQLearner.load(path)
     assert loaded.config == config and loaded.t == learner.t == 400 and loaded.seed == 4
     np.testing.assert_array_equal(loaded.trial_ids, [4, 0, 9])
     for name in ("input_weights", "action_weights", "q"):
@@ -182,12 +182,12 @@ def test_save_load_round_trip(tmp_path, mid_step):
 
 def test_resume_equals_uninterrupted(tmp_path):
     config = SOMQConfig(input_shape=(5,), action_shape=(4,))
-    whole = SOMQ(config, n_trials=2, seed=1, **BOX2)
-    first = SOMQ(config, n_trials=2, seed=1, **BOX2)
+    whole = SOMQLearner(config, n_trials=2, seed=1, **BOX2)
+    first = SOMQLearner(config, n_trials=2, seed=1, **BOX2)
     expected = _run(whole, 900)
     got = [_run(first, 600)]
     first.save(tmp_path / "l.npz")
-    resumed = SOMQ.load(tmp_path / "l.npz")
+    resumed = SOMQLearner.load(tmp_path / "l.npz")
     got.append(_run(resumed, 300, start=600))
     np.testing.assert_array_equal(np.concatenate(got), expected)
     np.testing.assert_array_equal(resumed.q, whole.q)
@@ -196,8 +196,8 @@ def test_resume_equals_uninterrupted(tmp_path):
 
 def test_predict_is_greedy_and_draws_nothing():
     config = SOMQConfig(input_shape=(3, 3), action_shape=(4,))
-    a = SOMQ(config, n_trials=2, seed=0, **BOX2)
-    b = SOMQ(config, n_trials=2, seed=0, **BOX2)
+    a = SOMQLearner(config, n_trials=2, seed=0, **BOX2)
+    b = SOMQLearner(config, n_trials=2, seed=0, **BOX2)
     _run(a, 50), _run(b, 50)
     many = np.random.default_rng(0).random((2, 7, 2))
     predicted = a.predict(many)
@@ -256,16 +256,16 @@ def test_bad_overrides_one_clear_line(overrides, match):
         (lambda: SOMQConfig(n_a=-1), "n_a must be >= 0"),
         (lambda: SOMQConfig(p=Schedule(1.2)), "p must be a probability"),
         (lambda: SOMQConfig(input_init=(1.0, 0.0)), "input_init"),
-        (lambda: SOMQ(SOMQConfig(), observation_low=[0, 1], observation_high=[1, 1], action_low=[0],
+        (lambda: SOMQLearner(SOMQConfig(), observation_low=[0, 1], observation_high=[1, 1], action_low=[0],
                       action_high=[1]), "observation bounds need low < high"),
-        (lambda: SOMQ(SOMQConfig(), observation_low=[0], observation_high=[1], action_low=[0, 0],
+        (lambda: SOMQLearner(SOMQConfig(), observation_low=[0], observation_high=[1], action_low=[0, 0],
                       action_high=[1]), "action high must have shape"),
-        (lambda: SOMQ(SOMQConfig(), n_trials=0, **BOX2), "n_trials"),
-        (lambda: SOMQ(SOMQConfig(), seed=-1, **BOX2), "seed"),
-        (lambda: SOMQ({"alpha": 1}, **BOX2), "config must be a SOMQConfig"),
+        (lambda: SOMQLearner(SOMQConfig(), n_trials=0, **BOX2), "n_trials"),
+        (lambda: SOMQLearner(SOMQConfig(), seed=-1, **BOX2), "seed"),
+        (lambda: SOMQLearner({"alpha": 1}, **BOX2), "config must be a SOMQConfig"),
         (lambda: SOMQConfig(q_init=float("nan")), "q_init must be finite"),
         (lambda: SOMQConfig(action_init="even"), "action_init must be one of random, grid, got 'even'"),
-        (lambda: SOMQ(SOMQConfig(action_shape=(9,), action_init="grid"), **BOX2),
+        (lambda: SOMQLearner(SOMQConfig(action_shape=(9,), action_init="grid"), **BOX2),
          "action_init=grid needs an action map with one grid dimension per action dimension: action_shape=9 has 1"),
         (lambda: SOMQConfig(action_init="grid", grid_span=0.0), "grid_span must be in \\(0, 1\\], got 0.0"),
         (lambda: SOMQConfig(action_init="grid", grid_span=1.5), "grid_span must be in \\(0, 1\\], got 1.5"),
@@ -278,7 +278,7 @@ def test_bad_construction(make, match):
 
 
 def test_bad_observations_and_rewards_are_rejected_not_clipped():
-    learner = SOMQ(SOMQConfig(input_shape=(3,), action_shape=(3,)), n_trials=2, **BOX2)
+    learner = SOMQLearner(SOMQConfig(input_shape=(3,), action_shape=(3,)), n_trials=2, **BOX2)
     with pytest.raises(ValueError, match="learn\\(\\) needs a preceding act"):
         learner.learn([0.0, 0.0])
     for bad, match in [([[0.1, 0.2]], "observations must have shape"), ([[0.1, np.nan], [0, 0]], "finite"),
@@ -301,7 +301,7 @@ def test_bad_observations_and_rewards_are_rejected_not_clipped():
 
 
 def test_conforms_to_protocol_and_exposes_grids_and_parameters():
-    learner = SOMQ(SOMQConfig(input_shape=(10, 10), action_shape=(8,)), n_trials=3, **BOX2)
+    learner = SOMQLearner(SOMQConfig(input_shape=(10, 10), action_shape=(8,)), n_trials=3, **BOX2)
     assert isinstance(learner, Learner)
     assert learner.input_grid.shape == (100, 2) and learner.action_grid.shape == (8, 2)
     assert learner.input_weights.shape == (3, 100, 2) and learner.action_weights.shape == (3, 8, 2)
@@ -316,7 +316,7 @@ def test_conforms_to_protocol_and_exposes_grids_and_parameters():
 
 def test_act_copies_the_proposed_action_and_input_init_is_used():
     config = SOMQConfig(input_shape=(4,), action_shape=(5,), epsilon=0.5, input_init=(0.25, 0.5))
-    learner = SOMQ(config, n_trials=3, seed=1, **BOX2)
+    learner = SOMQLearner(config, n_trials=3, seed=1, **BOX2)
     assert learner.input_weights.min() >= 0.25 and learner.input_weights.max() < 0.5
     before = learner.action_weights.copy()
     actions = learner.act(np.full((3, 2), 0.3))  # step 7 (in learn) is the only place the action map may move
@@ -334,7 +334,7 @@ def test_relative_epsilon_scales_with_each_action_range():
     for relative in (False, True):
         config = SOMQConfig(input_shape=(1,), action_shape=(1,), p=0.0, epsilon=0.01,
                             epsilon_relative=relative)
-        learner = SOMQ(config, n_trials=200, seed=0, **box)
+        learner = SOMQLearner(config, n_trials=200, seed=0, **box)
         learner.action_weights[...] = [0.5, 0.0]  # far from the bounds: nothing is clipped
         steps.append(np.abs(learner.act(np.zeros((200, 1))) - [0.5, 0.0]))
     assert steps[0].max() <= 0.01 and steps[0][:, 1].max() > 0.009  # absolute: 0.01 in both dimensions
@@ -347,7 +347,7 @@ def test_grid_span_spreads_the_grid_over_a_middle_part_of_the_action_box():
     # A 5-unit line over a fifth of [-3, 3] runs from -0.6 to 0.6; a 3 x 3 rectangle over a tenth of
     # [-1, 1] x [0, 1] is centred on (0, 0.5); span 1 is the whole box.
     box = dict(observation_low=[0.0], observation_high=[1.0], action_low=[-3.0], action_high=[3.0])
-    narrow = SOMQ(SOMQConfig(input_shape=(2,), action_shape=(5,), action_init="grid", grid_span=0.2), **box)
+    narrow = SOMQLearner(SOMQConfig(input_shape=(2,), action_shape=(5,), action_init="grid", grid_span=0.2), **box)
     np.testing.assert_allclose(narrow.action_weights[0, :, 0], [-0.6, -0.3, 0.0, 0.3, 0.6])
     square = grid_actions((3, 3), np.array([-1.0, 0.0]), np.array([1.0, 1.0]), 0.1)
     np.testing.assert_allclose(square[[0, 4, 8]], [[-0.1, 0.45], [0.0, 0.5], [0.1, 0.55]])
@@ -364,7 +364,7 @@ def test_optimistic_q_init_makes_the_greedy_policy_try_every_action_unit():
     for q_init in (0.0, 2.0):
         config = SOMQConfig(input_shape=(1,), action_shape=(5,), alpha=1.0, lambda_a=0.0, n_a=0.0, p=0.0,
                             epsilon=0.0, action_init="grid", q_init=q_init)
-        learner = SOMQ(config, seed=3, **box)
+        learner = SOMQLearner(config, seed=3, **box)
         np.testing.assert_array_equal(learner.action_weights[0, :, 0], [0.0, 0.25, 0.5, 0.75, 1.0])
         assert (learner.q == q_init).all()
         actions = []
