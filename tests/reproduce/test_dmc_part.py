@@ -39,17 +39,26 @@ def test_somarms_learners_train_on_the_fresh_seeds_and_each_peer_alone_on_its_ow
     assert merged["learners"]["sac"]["seeds"] == list(range(5))
 
 
-def test_recorded_peers_are_read_at_their_recorded_seeds_and_none_is_trained(faked):
+def test_a_recorded_report_reads_each_group_at_its_recorded_seeds_and_trains_none(faked):
     calls, ctx = faked
-    seeds = ctx.out_dir / "dmc" / "cartpole-balance" / "sac" / "seeds"
-    seeds.mkdir(parents=True)
-    for seed in (0, 1, 3):  # seed 2 is missing: the recorded seeds stop at 1
-        (seeds / f"sac-{seed}.json").write_text("{}")
-    results = dmc.train(ctx, dmc.SEEDS, 100, ("dmc:cartpole-balance",), peers_recorded=True)
-    assert [(c.learners, c.seed, c.seeds) for c in calls] == [(("somq", "somq+"), 10, 5), (("sac",), 0, 2)]
-    m = dmc.measure(results)["dmc:cartpole-balance"]
-    assert m["seeds"]["sac"] == [0, 1] and "td3" not in m["seeds"]
-    assert any("SB3 TD3 at 0 of 5 seeds" in line for line in dmc._missing({"dmc:cartpole-balance": m}, dmc.SEEDS))
+    folder = ctx.out_dir / "dmc" / "cartpole-balance"
+    for group, kinds, seeds in (("sac", ("sac",), (0, 1, 3)), ("somq-somq+", ("somq", "somq+"), (10, 11, 12))):
+        (folder / group / "seeds").mkdir(parents=True)
+        for kind in kinds:
+            for seed in seeds:  # sac's seed 2 is missing: its recorded seeds stop at 1
+                (folder / group / "seeds" / f"{kind}-{seed}.json").write_text("{}")
+    (folder / "somq-somq+" / "seeds" / "somq+-12.json").unlink()  # both responses are needed at a seed
+    results = dmc.train(ctx, dmc.SEEDS, 100, ("dmc:cartpole-balance", "dmc:reacher-easy"), recorded=True)
+    assert [(c.learners, c.seed, c.seeds) for c in calls] == [(("somq", "somq+"), 10, 2), (("sac",), 0, 2)]
+    assert list(results) == ["dmc:cartpole-balance"]  # no record of reacher-easy: left out
+    m = dmc.measure(results)
+    assert m["dmc:cartpole-balance"]["seeds"]["sac"] == [0, 1] and "td3" not in m["dmc:cartpole-balance"]["seeds"]
+    missing = dmc._missing(m, dmc.SEEDS, ("dmc:cartpole-balance", "dmc:reacher-easy"))
+    assert "- dmc:reacher-easy: no seed recorded" in missing
+    assert any("SB3 TD3 at 0 of 5 seeds" in line for line in missing)
+    assert any("SOM-Q at 2 of 5 seeds (seeds 10-11 recorded)" in line for line in missing)
+    claims = dmc._claims(m)
+    assert [c.holds for c in claims if "point_mass" in c.claim] == [None, None]
 
 
 def _measured(somq, sac):
