@@ -161,7 +161,7 @@ def _claims(m: dict) -> list[Claim]:
     claims = []
     for task in TARGET_TASKS:
         if task not in m:
-            claims.extend(Claim(f"Target (issue 39): {NAMES[kind]} reaches at least {TARGET_SHARE:.0%} of SAC's final "
+            claims.extend(Claim(f"Target (this project's): {NAMES[kind]} reaches at least {TARGET_SHARE:.0%} of SAC's final "
                                 f"greedy return on {task}.", "no seed of this task is recorded in this report.", None,
                                 "not measured") for kind in ("somq", "somq+"))
             continue
@@ -176,7 +176,7 @@ def _claims(m: dict) -> list[Claim]:
                         f"{TARGET_SHARE * sac:.1f}; {NAMES[kind]} / SAC = {mean / sac:.3f}" if sac > 0 else
                         f"SAC {sac:.1f}")
             claims.append(Claim(
-                f"Target (issue 39): {NAMES[kind]} reaches at least {TARGET_SHARE:.0%} of SAC's final greedy return "
+                f"Target (this project's): {NAMES[kind]} reaches at least {TARGET_SHARE:.0%} of SAC's final greedy return "
                 f"on {task}.",
                 f"{NAMES[kind]} ends at {mean:.1f} ± {sd:.1f} over {len(data['seeds'][kind])} seeds (random actions "
                 f"{data['random']:.1f}); {peer}.",
