@@ -47,14 +47,13 @@ def _bounded(spec) -> bool:
 
 
 def names() -> tuple[str, ...]:
-    """Every suite task, as ``dmc:DOMAIN-TASK``, in the suite's order (``gym_envs.suite_names``).
+    """Every suite task, as ``dmc:DOMAIN-TASK``, in the suite's order.
 
     Listed without building them (building all takes seconds): every suite task's action spec is
     bounded (a test opens each), and ``SuiteEnv`` refuses one that is not, should the suite add it.
+    ``gym_envs.suite_names`` lists the same without importing Gymnasium (for ``somarm tasks``).
     """
-    from somarm.tasks.gym_envs import suite_names
-
-    return suite_names()
+    return tuple(f"{PREFIX}{domain}-{task}" for domain, task in _suite_tasks())
 
 
 def split_name(name: str) -> tuple[str, str]:
