@@ -249,7 +249,7 @@ def _short(m: dict) -> list[str]:
               "pay a reward only near their goal, so random actions earn about nothing, and SOM-Q's presets explore by "
               "optimistic initial Q values alone; no setting tried on the tuning seeds found the reward within "
               "300,000 steps. The cartpole and reacher tasks pay a dense reward, and there SOM-Q stays far below the "
-              "published SAC returns at the same budget (the ratios above); why was not found in this session."]
+              "published SAC returns at the same budget (the ratios above), for reasons not yet known."]
     return lines
 
 
