@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Claim", "Section", "merge_seeds", "render", "claim_record", "TITLE", "BENCHMARKS_TITLE"]
+__all__ = ["Claim", "Section", "merge_seeds", "render", "claim_record", "TITLE", "BENCHMARKS_TITLE", "SUITE_TITLE"]
 
 
 @dataclass
@@ -130,9 +130,10 @@ def _json_number(x) -> float | None:
     return x if np.isfinite(x) else None
 
 
-#: The report's title, and the title of a report of Gymnasium's benchmarks alone.
+#: The report's title, and the titles of a report of Gymnasium's benchmarks alone and of the suite's.
 TITLE = "somarm: reproduction of Smith (2002)"
 BENCHMARKS_TITLE = "somarm: SOM-Q on Gymnasium's benchmarks beside TD3 and SAC"
+SUITE_TITLE = "somarm: SOM-Q on the DeepMind Control Suite beside TD3 and SAC"
 
 
 def render(sections: list[Section], *, header: list[str], out_dir: Path, seeds: list[int] | None = None,

@@ -29,7 +29,7 @@ from somarm.reproduce import (
     throw_maps,
 )
 from somarm.reproduce.common import Context, run_experiment
-from somarm.reproduce.report import BENCHMARKS_TITLE, TITLE, Section, claim_record, render
+from somarm.reproduce.report import BENCHMARKS_TITLE, SUITE_TITLE, TITLE, Section, claim_record, render
 from somarm.reproduce.sizes import check_seeds
 from somarm.tasks.record import OWN_BACKENDS
 from somarm.validation import check_int
@@ -235,9 +235,10 @@ def _write(
     complete: bool,
 ) -> None:
     benchmarks_only = bool(sections) and all(s.name in GYMNASIUM_PARTS for s in sections)
+    suite_only = benchmarks_only and all(s.name in dmc.PARTS for s in sections)
     header = _header(sections, quick=quick, seeds=seeds, backend=backend, total=total, complete=complete,
-                     benchmarks_only=benchmarks_only)
-    title = BENCHMARKS_TITLE if benchmarks_only else TITLE
+                     benchmarks_only=benchmarks_only, suite_only=suite_only)
+    title = SUITE_TITLE if suite_only else BENCHMARKS_TITLE if benchmarks_only else TITLE
     atomic_write_text(out / "REPORT.md", render(sections, header=header, out_dir=out, seeds=seeds, title=title))
     atomic_write_json(
         out / "claims.json",
@@ -258,12 +259,14 @@ def _write(
 
 
 def _header(sections: list[Section], *, quick: bool, seeds: list[int], backend: str, total: float,
-            complete: bool, benchmarks_only: bool) -> list[str]:
+            complete: bool, benchmarks_only: bool, suite_only: bool = False) -> list[str]:
     """The report's opening lines: the mode, the seeds, where rewards come from, the wall time and
     which values are this project's choices (the benchmarks part alone runs Gymnasium's own
     environments, and its seeds may be read back from an earlier run)."""
     slowest = max(sections, key=lambda s: s.wall_time_s, default=None)
-    if benchmarks_only:
+    if suite_only:
+        where = "every return from the DeepMind Control Suite's own tasks (through Gymnasium's API)"
+    elif benchmarks_only:
         where = "every return from Gymnasium's own environment"
     elif backend == "mujoco":
         where = "every reward evaluated in MuJoCo (the tasks' default backend)"
@@ -277,7 +280,8 @@ def _header(sections: list[Section], *, quick: bool, seeds: list[int], backend: 
               "read back, not trained again; each learner's own training seconds are in the table)"
               if benchmarks_only else f"Total wall time {total:.1f} s")
     choices = ("The presets, run lengths, the peers' budgets, the targets and the yardsticks are this project's "
-               "choices, stated in the part; the paper ran no Gymnasium environment." if benchmarks_only else
+               f"choices, stated in the part; the paper ran no {'suite task' if suite_only else 'Gymnasium environment'}."
+               if benchmarks_only else
                "Arm lengths, the goal circle, the four goals, the reading of epsilon in Tables 1 and 2 (a fraction of "
                "the angle range), the Motoric Map's rules, run lengths and the levels and bounds used in the "
                "verdicts are this project's choices, stated in each part; the paper publishes none of them.")

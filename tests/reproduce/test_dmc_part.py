@@ -82,3 +82,14 @@ def test_the_target_is_90_percent_of_sacs_final_return_and_undecided_without_sac
 def test_report_seeds_of_the_part_are_fresh():
     assert not set(dmc.SEEDS.ours) & set(range(100, 200)) and not set(dmc.SEEDS.peers) & set(range(100, 200))
     assert isinstance(dmc.SEEDS, ReportSeeds)
+
+
+def test_a_report_of_the_suite_alone_is_titled_and_sourced_as_the_suites():
+    from somarm.reproduce import report, runner
+    from somarm.reproduce.report import Section
+
+    sections = [Section("dmc_recorded", "The DeepMind Control Suite")]
+    header = runner._header(sections, quick=True, seeds=[0], backend="mujoco", total=1.0, complete=True,
+                            benchmarks_only=True, suite_only=True)
+    assert "DeepMind Control Suite's own tasks" in header[0] and "Gymnasium's own environment" not in header[0]
+    assert report.SUITE_TITLE != report.BENCHMARKS_TITLE
