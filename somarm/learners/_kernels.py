@@ -17,7 +17,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["all_finite", "grid_distance", "neighbourhood_row", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
+__all__ = ["all_finite", "grid_distance", "neighbourhood_row", "grid_row", "nearest_unit", "perturbation", "wrapped", "arc", "act_kernel", "learn_kernel"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -44,7 +44,13 @@ def grid_distance(offsets, a, b):
 def neighbourhood_row(offsets, centre, width, out):
     """The linear neighbourhood ``max(0, 1 - d / (width + 1))`` of every unit round ``centre`` into ``out``,
     d the grid distance read from ``offsets`` (as ``somarm.learners.som.neighbourhood``, bit for bit)."""
-    rows, cols = offsets.shape
+    grid_row(offsets, offsets.shape[0], offsets.shape[1], centre, width, out)
+
+
+@numba.njit(cache=True, nogil=True)
+def grid_row(offsets, rows, cols, centre, width, out):
+    """``neighbourhood_row`` over the first ``rows x cols`` units of a map laid out row-major in that shape
+    (a growing map's current grid), 0 beyond them; distances still read from the full map's ``offsets``."""
     w = width + 1.0
     r0 = centre // cols
     c0 = centre - r0 * cols
@@ -54,6 +60,8 @@ def neighbourhood_row(offsets, centre, width, out):
         for c in range(cols):
             out[m] = max(0.0, 1.0 - offsets[dr, abs(c - c0)] / w)
             m += 1
+    for n in range(m, out.shape[0]):
+        out[n] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)

@@ -38,8 +38,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from somarm.learners._kernels import _pull, _pull_action, neighbourhood_row, perturbation, wrapped
-from somarm.learners.growing import grid_row, grow
+from somarm.learners._kernels import _pull, _pull_action, grid_row, neighbourhood_row, perturbation, wrapped
+from somarm.learners.growing import grow
 
 __all__ = ["features", "act_kernel", "learn_kernel", "predict_kernel", "greedy_kernel"]
 

@@ -15,27 +15,10 @@ from __future__ import annotations
 
 import numba
 
-__all__ = ["START", "grid_row", "grow"]
+__all__ = ["START", "grow"]
 
 #: The units along each grid dimension a growing map starts with.
 START = 2
-
-
-@numba.njit(cache=True, nogil=True)
-def grid_row(offsets, rows, cols, centre, width, out):
-    """The linear neighbourhood ``max(0, 1 - d / (width + 1))`` round ``centre`` of a map of ``rows x cols``
-    units into ``out[:rows * cols]``, 0 beyond; with the full map's shape, ``_kernels.neighbourhood_row``."""
-    w = width + 1.0
-    r0 = centre // cols
-    c0 = centre - r0 * cols
-    m = 0
-    for r in range(rows):
-        dr = abs(r - r0)
-        for c in range(cols):
-            out[m] = max(0.0, 1.0 - offsets[dr, abs(c - c0)] / w)
-            m += 1
-    for n in range(m, out.shape[0]):
-        out[n] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)
