@@ -291,27 +291,36 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
 
 
 @numba.njit(cache=True, nogil=True)
+def _scratch(n_groups, width, k, n_actions):
+    """The per-call scratch of the greedy kernels: ``values``, ``part``, ``order``, ``squared``, ``units``, ``phi``."""
+    return (np.empty(n_actions), np.empty(width), np.empty(k + 1, dtype=np.int64), np.empty(k + 1),
+            np.empty((n_groups, k), dtype=np.int64), np.empty((n_groups, k)))
+
+
+@numba.njit(cache=True, nogil=True)
+def _greedy_of(x, input_weights, q, groups, shapes, k, scratch):
+    """The greedy action unit of one observation (ties to the lowest index); leaves the summed Q in
+    ``scratch[0]`` and each map's nearest units in ``scratch[4]``."""
+    values, part, order, squared, units, phi = scratch
+    features(x, input_weights, groups, shapes, k, units, phi, part, order, squared)
+    _summed(q, units, phi, values)
+    return _greedy(values, -1.0)
+
+
+@numba.njit(cache=True, nogil=True)
 def predict_kernel(observations, input_weights, action_weights, q, groups, shapes, k, interpolated, action_shape, low,
                    high, wrap, out):
     """Greedy actions of ``observations (n_trials, n_obs, obs_dim)`` into ``out (n_trials, n_obs, action_dim)``:
     the best summed Q, ties to the lowest index, the parabola's shift with the interpolated response."""
-    n_groups = groups.shape[0]
-    values = np.empty(q.shape[2])
-    part = np.empty(groups.shape[1])
-    order = np.empty(k + 1, dtype=np.int64)
-    squared = np.empty(k + 1)
-    units = np.empty((n_groups, k), dtype=np.int64)
-    phi = np.empty((n_groups, k))
+    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            features(observations[trial, n], input_weights[trial], groups, shapes[trial], k, units, phi, part, order, squared)
-            _summed(q[trial], units, phi, values)
-            unit = _greedy(values, -1.0)
+            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], groups, shapes[trial], k, scratch)
             action = out[trial, n]
             for i in range(action.shape[0]):
                 action[i] = action_weights[trial, unit, i]
             if interpolated:
-                _parabola_shift(values, unit, action_shape, action_weights[trial], action)
+                _parabola_shift(scratch[0], unit, action_shape, action_weights[trial], action)
                 for i in range(action.shape[0]):
                     value = action[i]
                     action[i] = wrapped(value, low[i], high[i]) if wrap[i] else min(max(value, low[i]), high[i])
@@ -321,16 +330,9 @@ def predict_kernel(observations, input_weights, action_weights, q, groups, shape
 def greedy_kernel(observations, input_weights, q, groups, shapes, k, units_out, first_out):
     """The greedy action unit (ties to the lowest index) and the first map's nearest unit of
     ``observations (n_trials, n_obs, obs_dim)``, into ``units_out``/``first_out`` ``(n_trials, n_obs)``."""
-    n_groups = groups.shape[0]
-    values = np.empty(q.shape[2])
-    part = np.empty(groups.shape[1])
-    order = np.empty(k + 1, dtype=np.int64)
-    squared = np.empty(k + 1)
-    units = np.empty((n_groups, k), dtype=np.int64)
-    phi = np.empty((n_groups, k))
+    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            features(observations[trial, n], input_weights[trial], groups, shapes[trial], k, units, phi, part, order, squared)
-            _summed(q[trial], units, phi, values)
-            units_out[trial, n] = _greedy(values, -1.0)
-            first_out[trial, n] = units[0, 0]
+            units_out[trial, n] = _greedy_of(observations[trial, n], input_weights[trial], q[trial], groups,
+                                             shapes[trial], k, scratch)
+            first_out[trial, n] = scratch[4][0, 0]
