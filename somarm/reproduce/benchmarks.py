@@ -12,6 +12,7 @@ greedy policy over the same fresh episodes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from somarm.reproduce import yardsticks
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
-__all__ = ["ENVIRONMENTS", "LEARNERS", "BASELINES", "PARTS", "TARGETS", "SPEED", "TUNING_SEEDS", "FRESH", "ReportSeeds", "budgets", "train",
+__all__ = ["ENVIRONMENTS", "LEARNERS", "BASELINES", "PARTS", "TARGETS", "SPEED", "TUNING_SEEDS", "FRESH", "ReportSeeds", "compare_groups", "reach", "budgets", "train",
            "measure", "benchmarks", "benchmarks_pendulum",
            "benchmarks_invertedpendulum", "benchmarks_reacher", "benchmarks_mountaincar"]
 
@@ -111,30 +112,42 @@ def train(ctx: Context, seeds: ReportSeeds, episodes: int,
     results = {}
     for env_id in envs:
         ours, peers = budgets(ctx, env_id)
-        merged: dict = {}
         somq = tuple(k for k in LEARNERS if k not in compare.PEERS + BASELINES)
         baselines = tuple(k for k in BASELINES if not (k == "tabular" and env_id in _NO_GRID))
         groups = [(somq, None, seeds.ours), (baselines, None, seeds.peers)]
         groups += [((k,), n, seeds.peers) for k, n in peers.items()]
-        for learners, peer_samples, side in groups:
-            config = compare.CompareConfig(task="gym:" + env_id, learners=learners, samples=ours,
-                                           peer_samples=peer_samples, seeds=len(side), seed=side.start,
-                                           episodes=episodes, eval_seed=ctx.seed)
-            # A fresh report folder holds no seed records; one given with --resume keeps its finished seeds.
-            part = compare.compare(config, ctx.out_dir / "benchmarks" / env_id / "-".join(learners),
-                                   progress=ctx.progress, resume=True)
-            for data in part["learners"].values():
-                data["seeds"] = part["seeds"]
-            every = sorted(set(merged.get("seeds", [])) | set(part["seeds"]))
-            merged = {**part, "seeds": every, "learners": {**merged.get("learners", {}), **part["learners"]}}
-        folder = ctx.out_dir / "benchmarks" / env_id
-        atomic_write_json(folder / "compare.json", merged)
-        compare_figure(merged, folder / "compare.png")
-        results[env_id] = merged
+        results[env_id] = compare_groups(ctx, "gym:" + env_id, groups, ctx.out_dir / "benchmarks" / env_id,
+                                         samples=ours, episodes=episodes)
     return results
 
 
-def _reach(data: dict, target: float) -> tuple[int, float] | None:
+def compare_groups(ctx: Context, task: str, groups: list[tuple[tuple[str, ...], int | None, range]], folder: Path,
+                   *, samples: int, episodes: int, task_params: dict | None = None) -> dict:
+    """Each ``(learners, peer_samples, seeds)`` group through ``compare`` in ``folder/<learners>/``, then
+    all of them merged (each learner with its ``seeds``) into ``folder/compare.json`` and ``compare.png``;
+    ``{}`` (nothing written) for no group.
+
+    Raises:
+      KeyboardInterrupt: a comparison was stopped (what finished is written).
+    """
+    merged: dict = {}
+    for learners, peer_samples, side in groups:
+        config = compare.CompareConfig(task=task, learners=learners, samples=samples, peer_samples=peer_samples,
+                                       seeds=len(side), seed=side.start, episodes=episodes, eval_seed=ctx.seed,
+                                       task_params=task_params or {})
+        # A fresh report folder holds no seed records; one given with --resume keeps its finished seeds.
+        part = compare.compare(config, folder / "-".join(learners), progress=ctx.progress, resume=True)
+        for data in part["learners"].values():
+            data["seeds"] = part["seeds"]
+        every = sorted(set(merged.get("seeds", [])) | set(part["seeds"]))
+        merged = {**part, "seeds": every, "learners": {**merged.get("learners", {}), **part["learners"]}}
+    if merged:
+        atomic_write_json(folder / "compare.json", merged)
+        compare_figure(merged, folder / "compare.png")
+    return merged
+
+
+def reach(data: dict, target: float) -> tuple[int, float] | None:
     """The first rung where the mean return over seeds reaches ``target``: (samples, median seconds)."""
     means = np.mean(np.array(data["return"]), axis=1)
     reached = np.flatnonzero(means >= target)
@@ -156,8 +169,8 @@ def measure(results: dict[str, dict]) -> dict:
             "final": {k: (float(f.mean()), float(f.std())) for k, f in finals.items()},
             "seeds": {k: f.size for k, f in finals.items()},
             "converged": float(converged),
-            "to_converged": {k: _reach(v, converged) for k, v in learners.items()},
-            "to_target": {k: _reach(v, TARGETS[env_id]) for k, v in learners.items()},
+            "to_converged": {k: reach(v, converged) for k, v in learners.items()},
+            "to_target": {k: reach(v, TARGETS[env_id]) for k, v in learners.items()},
             "per_sample": {k: float(np.median(v["seconds_per_sample"])) for k, v in learners.items()},
             "random": result["random_action_return"],
         }

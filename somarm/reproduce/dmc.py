@@ -19,10 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from somarm.io import atomic_write_json
 from somarm.peers import compare
-from somarm.peers.figure import NAMES, compare_figure
-from somarm.reproduce.benchmarks import ReportSeeds
+from somarm.peers.figure import NAMES
+from somarm.reproduce.benchmarks import ReportSeeds, compare_groups, reach
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 
@@ -108,31 +107,11 @@ def train(ctx: Context, seeds: ReportSeeds, episodes: int, tasks: tuple[str, ...
                 side = recorded_seeds(folder / "-".join(learners), learners, side)
             if len(side):
                 groups.append((learners, peer_samples, side))
-        merged: dict = {}
-        for learners, peer_samples, side in groups:
-            config = compare.CompareConfig(task=task, learners=learners, samples=ours, peer_samples=peer_samples,
-                                           seeds=len(side), seed=side.start, episodes=episodes, eval_seed=ctx.seed,
-                                           task_params=ctx.pick({}, dict(QUICK_PARAMS)))
-            part = compare.compare(config, folder / "-".join(learners), progress=ctx.progress, resume=True)
-            for data in part["learners"].values():
-                data["seeds"] = part["seeds"]
-            every = sorted(set(merged.get("seeds", [])) | set(part["seeds"]))
-            merged = {**part, "seeds": every, "learners": {**merged.get("learners", {}), **part["learners"]}}
-        if not merged:
-            continue
-        atomic_write_json(folder / "compare.json", merged)
-        compare_figure(merged, folder / "compare.png")
-        results[task] = merged
+        merged = compare_groups(ctx, task, groups, folder, samples=ours, episodes=episodes,
+                                task_params=ctx.pick({}, dict(QUICK_PARAMS)))
+        if merged:
+            results[task] = merged
     return results
-
-
-def _reach(data: dict, level: float) -> tuple[int, float] | None:
-    """The first rung where the mean return over seeds reaches ``level``: (samples, median seconds)."""
-    means = np.mean(np.array(data["return"]), axis=1)
-    reached = np.flatnonzero(means >= level)
-    if not reached.size:
-        return None
-    return data["samples"][reached[0]], float(np.median(np.array(data["wall_seconds"])[reached[0]]))
 
 
 def measure(results: dict[str, dict]) -> dict:
@@ -148,7 +127,7 @@ def measure(results: dict[str, dict]) -> dict:
             "seeds": {k: list(v["seeds"]) for k, v in learners.items()},
             "budget": {k: int(v["samples"][-1]) for k, v in learners.items()},
             "sac": sac,
-            "to_share": {k: None if sac is None else _reach(v, TARGET_SHARE * sac) for k, v in learners.items()},
+            "to_share": {k: None if sac is None else reach(v, TARGET_SHARE * sac) for k, v in learners.items()},
             "per_sample": {k: float(np.median(v["seconds_per_sample"])) for k, v in learners.items()},
             "random": result["random_action_return"],
         }

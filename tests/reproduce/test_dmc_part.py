@@ -3,7 +3,7 @@
 import pytest
 
 from somarm.peers import compare
-from somarm.reproduce import dmc
+from somarm.reproduce import benchmarks, dmc
 from somarm.reproduce.benchmarks import ReportSeeds
 from somarm.reproduce.common import Context
 
@@ -23,7 +23,7 @@ def _fake_compare(calls):
 def faked(tmp_path, monkeypatch):
     calls = []
     monkeypatch.setattr(compare, "compare", _fake_compare(calls))
-    monkeypatch.setattr(dmc, "compare_figure", lambda result, path: None)
+    monkeypatch.setattr(benchmarks, "compare_figure", lambda result, path: None)
     return calls, Context(out_dir=tmp_path, seed=0, progress=False)
 
 
