@@ -51,3 +51,21 @@ def one_error_line(done, *needles: str) -> str:
     for needle in needles:
         assert needle in lines[0], lines[0]
     return lines[0]
+
+
+def train_into_an_endless_evaluation(out, env):
+    """``somarm train gym:Pendulum-v1`` (300 steps, 2 trials) into ``out`` with greedy episodes 10^8 steps long
+    (without a cut the evaluation would run for days), returned once its last training step is shown."""
+    import subprocess
+
+    proc = subprocess.Popen(somarm_command("train", "gym:Pendulum-v1", "--steps", "300", "--trials", "2",
+                                           "--task-set", "max_episode_steps=100000000", "--task-set",
+                                           "evaluation_steps=100000000", "--no-figures", "--out", str(out)),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    lines = []
+    while not any("300/300" in line for line in lines):  # the progress line of the last step
+        lines.append(proc.stderr.readline())
+        if not lines[-1] and proc.poll() is not None:
+            proc.kill()
+            raise AssertionError("".join(lines))
+    return proc

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from processes import checkout_env, one_error_line, somarm_command
+from processes import checkout_env, one_error_line, somarm_command, train_into_an_endless_evaluation
 
 from somarm import run
 
@@ -30,16 +30,8 @@ def python(code: str, *, timeout: float = 120) -> subprocess.CompletedProcess:
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
 def test_a_signal_during_the_greedy_evaluation_cuts_it_and_writes_the_trained_run(tmp_path, sig):
     out = tmp_path / "run"
-    # Episodes 10^8 steps long: without a cut the evaluation would run for days.
-    proc = subprocess.Popen(somarm_command("train", "gym:Pendulum-v1", "--steps", "300", "--trials", "2",
-                                           "--task-set", "max_episode_steps=100000000", "--task-set",
-                                           "evaluation_steps=100000000", "--no-figures", "--out", str(out)),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    proc = train_into_an_endless_evaluation(out, ENV)
     try:
-        lines = []
-        while not any("300/300" in line for line in lines):  # the progress line of the last step
-            lines.append(proc.stderr.readline())
-            assert lines[-1] or proc.poll() is None, "".join(lines)
         time.sleep(1.0)  # in the greedy evaluation now
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=60)

@@ -9,7 +9,7 @@ import subprocess
 import time
 
 import pytest
-from processes import checkout_env, somarm_command
+from processes import checkout_env, somarm_command, train_into_an_endless_evaluation
 
 from somarm import run
 
@@ -19,16 +19,8 @@ ENV = checkout_env()
 
 def test_a_sigkill_during_the_greedy_evaluation_keeps_the_trained_run(tmp_path):
     out = tmp_path / "run"
-    # Episodes 10^8 steps long: the evaluation would run for days.
-    proc = subprocess.Popen(somarm_command("train", "gym:Pendulum-v1", "--steps", "300", "--trials", "2",
-                                           "--task-set", "max_episode_steps=100000000", "--task-set",
-                                           "evaluation_steps=100000000", "--no-figures", "--out", str(out)),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    proc = train_into_an_endless_evaluation(out, ENV)
     try:
-        lines = []
-        while not any("300/300" in line for line in lines):  # the progress line of the last step
-            lines.append(proc.stderr.readline())
-            assert lines[-1] or proc.poll() is None, "".join(lines)
         # The run is written before the evaluation starts: wait for its summary, then kill in the evaluation.
         deadline = time.monotonic() + 60
         while not (out / "summary.json").exists() and proc.poll() is None and time.monotonic() < deadline:
