@@ -11,7 +11,7 @@ import itertools
 
 import numpy as np
 
-__all__ = ["GROUPINGS", "check_groups", "parse_groups", "group_table"]
+__all__ = ["GROUPINGS", "check_groups", "dimensions_named", "parse_groups", "group_table"]
 
 
 #: The named groupings of ``input_groups`` (besides index lists and ``chunks:K``).
@@ -46,6 +46,15 @@ def check_groups(text: str) -> str:
         if len(set(group)) != len(group):
             raise ValueError(f"input_groups: dimension repeated within the map {','.join(map(str, group))} of {text!r}")
     return text
+
+
+def dimensions_named(text: str) -> int:
+    """The fewest observed dimensions ``input_groups`` can be read against: one past the largest index an
+    index list names (0 for the named groupings, which fit any size)."""
+    text = check_groups(text)
+    if text in GROUPINGS or text.startswith("chunks:"):
+        return 0
+    return 1 + max(int(v) for part in text.split(";") for v in part.split(","))
 
 
 def parse_groups(text: str, obs_dim: int) -> list[list[int]]:

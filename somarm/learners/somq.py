@@ -212,8 +212,8 @@ class SOMQLearner(MapLearner):
         if config.grouped:  # G maps of n_s units over the widest group's dimensions, G tables
             # obs_dim may be a lower bound (a run's check before its task is built): index lists then
             # count as many dimensions as they name.
-            named = [int(v) for v in config.input_groups.replace(";", ",").split(",") if v.strip().isdigit()]
-            table = grouping.group_table(grouping.parse_groups(config.input_groups, max([obs_dim, *(v + 1 for v in named)])))
+            size = max(obs_dim, grouping.dimensions_named(config.input_groups))
+            table = grouping.group_table(grouping.parse_groups(config.input_groups, size))
             n_maps, width = table.shape
             n_floats += n_trials * (n_maps * n_s * (width + n_a + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
