@@ -8,7 +8,7 @@ Three measurements, each in one run on this machine:
 2. ``steps``: MuJoCo's CPU per projectile-step (the thread CPU of the native rollouts over the RK4
    steps the throws need) in a training step of 20 and of 100 trials and in a large batch, for the
    tasks' design (a batch in one model, landed throws leaving: the staircase;
-   ``somarm.benchmarks.rollouts`` clocks it), and each step's cost per throw (the flights alone,
+   ``somarm.perf.rollouts`` clocks it), and each step's cost per throw (the flights alone,
    planned beforehand) as a multiple of the large batch's (the target: 1.5x at 100).
 3. ``paper``: the paper's experiments one after another (lanes as usual, no worker processes), with
    the CPU seconds of every thread spent in MuJoCo's native calls and in the learners' compiled
@@ -39,9 +39,9 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from somarm import tasks  # noqa: E402
-from somarm.benchmarks import best_seconds  # noqa: E402
-from somarm.benchmarks.rollouts import RolloutClock  # noqa: E402
 from somarm.learners import somq  # noqa: E402
+from somarm.perf import best_seconds  # noqa: E402
+from somarm.perf.rollouts import RolloutClock  # noqa: E402
 from somarm.reproduce import common, runner  # noqa: E402
 from somarm.tasks import arms, flight  # noqa: E402
 from somarm.tasks.assets import model_path  # noqa: E402

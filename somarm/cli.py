@@ -13,7 +13,7 @@ from somarm.validation import OneLineParser, check_int, check_memory, whole_numb
 
 __all__ = ["main"]
 
-_BENCHMARKS = ("learner", "tasks", "viewer", "adapters")
+_BENCHMARKS = ("learner", "tasks", "viewer", "adapters", "loop")
 
 
 def _out_folder(value: str | None, default: str) -> Path:
@@ -402,7 +402,7 @@ def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     _engine_options(comp, "every learner at every seed a unit of one CPU, its seed record written here")
     comp.set_defaults(func=_cmd_compare)
 
-    bench = sub.add_parser("bench", help="benchmarks: learner, tasks, viewer, adapters (pass --help after the name)")
+    bench = sub.add_parser("bench", help="speed and memory figures: learner, tasks, viewer, adapters, loop (pass --help after the name)")
     bench.add_argument("name", choices=_BENCHMARKS)
     sub.add_parser("view", help="meshcat browser viewer (pass --help after `view`)")
 
@@ -439,7 +439,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # bench and view take their own options: forward everything after the name.
         if argv[:1] == ["bench"] and len(argv) > 1 and argv[1] in _BENCHMARKS:
-            return _cmd_forward(f"somarm.benchmarks.{argv[1]}", argv[2:])
+            return _cmd_forward(f"somarm.perf.{argv[1]}", argv[2:])
         if argv[:1] == ["view"]:
             return _cmd_forward("somarm.viewer.cli", argv[1:])
         args = _parser(argv[:1]).parse_args(argv)  # only the command named is built whole

@@ -481,7 +481,7 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
     """
 
     from somarm import cluster
-    from somarm.peers.figure import compare_figure  # matplotlib loads only when a figure is drawn
+    from somarm.peers.plot import compare_figure  # matplotlib loads only when a figure is drawn
 
     if engine is None:
         engine, address = _engine

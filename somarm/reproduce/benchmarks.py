@@ -18,7 +18,7 @@ import numpy as np
 
 from somarm.io import atomic_write_json
 from somarm.peers import compare, zoo
-from somarm.peers.figure import NAMES, compare_figure
+from somarm.peers.plot import NAMES, compare_figure
 from somarm.reproduce import yardsticks
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section

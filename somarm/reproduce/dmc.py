@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from somarm.peers import compare
-from somarm.peers.figure import NAMES
+from somarm.peers.plot import NAMES
 from somarm.reproduce.benchmarks import ReportSeeds, compare_groups, reach
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section

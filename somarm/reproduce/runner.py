@@ -14,6 +14,7 @@ from somarm import __version__
 from somarm.io import atomic_write_json, atomic_write_text
 from somarm.peers.compare import peers_missing
 from somarm.reproduce import (
+    against_peers,
     benchmarks,
     beyond,
     delayed,
@@ -22,7 +23,6 @@ from somarm.reproduce import (
     four_goals,
     more_inputs,
     neighbourhood_q,
-    peers,
     reach2,
     reach20,
     throw,
@@ -52,7 +52,7 @@ EXPERIMENTS: dict[str, Callable[[Context], Section]] = {
 
 #: Parts run only when named with ``--only`` (they take far longer than the paper's experiments).
 OPTIONAL: dict[str, Callable[[Context], Section]] = {
-    "delayed_reward": delayed.delayed_reward, "peers": peers.peers, "benchmarks": benchmarks.benchmarks,
+    "delayed_reward": delayed.delayed_reward, "peers": against_peers.peers, "benchmarks": benchmarks.benchmarks,
     **benchmarks.PARTS, **dmc.PARTS,
 }
 #: The parts that run Gymnasium's environments (the whole benchmarks part and each environment alone).

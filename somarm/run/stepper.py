@@ -2,7 +2,7 @@
 
 Everything steps in the calling thread; the physics of a step is one batched call, which uses the
 batch's own threads (``tasks.threads()``). Stepping groups of learners in threads side by side did
-not pay: ``somarm.benchmarks.loop`` measured it no faster than one thread on the reproduction's groups.
+not pay: ``somarm.perf.loop`` measured it no faster than one thread on the reproduction's groups.
 """
 
 from __future__ import annotations

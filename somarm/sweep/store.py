@@ -196,7 +196,7 @@ def write_outputs(out: Path, table: Table, *, figure: bool = True) -> str:
     else:  # a best.json left from an earlier, narrower sweep would no longer be true
         (out / "best.json").unlink(missing_ok=True)
     if figure and table.rows:
-        from somarm.sweep import figure as sweep_figure
+        from somarm.sweep import plot as sweep_plot
 
-        sweep_figure.draw(table, out / "sweep.png")
+        sweep_plot.draw(table, out / "sweep.png")
     return line

@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from somarm import tasks
-from somarm.viewer.adapters import goal_adapter
 from somarm.viewer.postures import SweepShow
 from somarm.viewer.shows import ArmShow, load_model
+from somarm.viewer.task_readers import goal_reader
 from somarm.viewer.throws import throw_show
 
 __all__ = ["show_for_task"]
@@ -34,10 +34,10 @@ def show_for_task(task_name: str, task=None, *, sweep: int | None = None):
     if model_name == "launcher":
         return throw_show(task_name, task, model)
     if sweep is not None:
-        return SweepShow(model, sweep, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")
+        return SweepShow(model, sweep, goal_of=goal_reader(task), prefix=f"/meshcat/{task_name}")
     if task.episodic:  # reach2_obstacle: the arm where it is and the episode's goal, both observed
         show = ArmShow(model, prefix=f"/meshcat/{task_name}", pose_of=lambda observation, action: np.asarray(
             observation)[:2])
         show.goal_of = task.goal_of
         return show
-    return ArmShow(model, goal_of=goal_adapter(task), prefix=f"/meshcat/{task_name}")
+    return ArmShow(model, goal_of=goal_reader(task), prefix=f"/meshcat/{task_name}")

@@ -16,8 +16,8 @@ import numpy as np
 from meshcat.commands import SetTransform
 
 from somarm.viewer import framing, overlays
-from somarm.viewer.adapters import throw_adapters
 from somarm.viewer.scene import MujocoScene, path_of
+from somarm.viewer.task_readers import throw_readers
 from somarm.viewer.text import Timeline, css, number, text_command
 
 __all__ = ["ThrowShow", "ThrowStream", "ball_color", "throw_show"]
@@ -275,5 +275,5 @@ class ThrowStream:
 
 def throw_show(task_name: str, task, model: mujoco.MjModel) -> ThrowStream:
     """The show of a throwing task."""
-    trajectory_of, target_of = throw_adapters(task)
+    trajectory_of, target_of = throw_readers(task)
     return ThrowStream(ThrowShow(model, prefix=f"/meshcat/{task_name}"), task, trajectory_of, target_of)

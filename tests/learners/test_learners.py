@@ -50,7 +50,7 @@ def test_wrong_kind_and_atomic_overwrite(tmp_path):
 
 
 def test_bench_learner_smoke(capsys):
-    from somarm.benchmarks.learner import main
+    from somarm.perf.learner import main
 
     assert main(["--steps", "20", "--repeats", "1", "--trials", "1,3"]) == 0
     out = capsys.readouterr().out
@@ -60,7 +60,7 @@ def test_bench_learner_smoke(capsys):
     # The ratios are printed as numbers (their size depends on the machine's load: not asserted on).
     assert len(rows) == 16 and all(float(row[-1].rstrip("x")) >= 0 for row in rows)
     assert "interpolated within 2x of the winner response" in out
-    from somarm.benchmarks.learner import REPRESENTATIONS
+    from somarm.perf.learner import REPRESENTATIONS
 
     for label, _ in REPRESENTATIONS:  # one row per representation and trial count, with its memory
         found = [line for line in out.splitlines() if line[:36].rstrip() == label]

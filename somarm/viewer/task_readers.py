@@ -11,10 +11,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["goal_adapter", "throw_adapters"]
+__all__ = ["goal_reader", "throw_readers"]
 
 
-def goal_adapter(task) -> Callable[[np.ndarray], np.ndarray] | None:
+def goal_reader(task) -> Callable[[np.ndarray], np.ndarray] | None:
     """Observation ``(obs_dim,)`` -> goal (x, y) for the arm tasks; None means "the first two values"."""
     from somarm.tasks.four_goals import FourGoals
 
@@ -23,7 +23,7 @@ def goal_adapter(task) -> Callable[[np.ndarray], np.ndarray] | None:
     return None
 
 
-def throw_adapters(task):
+def throw_readers(task):
     """``(trajectory_of(observation), target_of(observation))`` for a throwing task.
 
     ``trajectory_of(observation)`` is a function ``(ux, uy) -> (times (T,), xz (T, 2))`` of time

@@ -1,4 +1,4 @@
-"""``python -m somarm.benchmarks.loop``: milliseconds per training step of a few lockstep groups of the reproduction.
+"""``somarm bench loop``: milliseconds per training step of a few lockstep groups of the reproduction.
 
 Each group (``run.RunGroup``) is built, then trained for ``--steps`` steps without a progress bar;
 the figure is the training's wall time per step (building excluded), the best of ``--repeats``
@@ -36,7 +36,7 @@ def step_ms(label: str, *, n_steps: int) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table; returns 0 (a benchmark reports, it does not fail)."""
-    parser = OneLineParser(prog="python -m somarm.benchmarks.loop", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="somarm bench loop", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="short runs, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=whole_number, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--steps", type=whole_number, default=2000, help="steps per timed run (2000)")

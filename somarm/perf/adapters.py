@@ -16,7 +16,7 @@ import argparse
 
 import numpy as np
 
-from somarm.benchmarks import best_seconds
+from somarm.perf import best_seconds
 from somarm.validation import whole_number
 
 __all__ = ["measure", "main"]

@@ -1,4 +1,4 @@
-"""Benchmarks: scripts that print figures (never timed tests). Run with ``somarm bench NAME``."""
+"""Speed and memory figures: scripts that print them (never timed tests). Run with ``somarm bench NAME``."""
 
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from somarm.learners.tabular import MAX_TABLE_ENTRIES, TabularConfig
 from somarm.peers import compare
-from somarm.peers.figure import NAMES
+from somarm.peers.plot import NAMES
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.report import Claim, Section
 

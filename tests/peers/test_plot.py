@@ -1,6 +1,6 @@
 """The comparison figure says how many seeds each curve is a median over."""
 
-from somarm.peers import figure
+from somarm.peers import plot
 
 
 def _result(counts):
@@ -12,8 +12,8 @@ def _result(counts):
 
 def _drawn(monkeypatch, result):
     seen = {}
-    monkeypatch.setattr(figure, "save", lambda fig, path: seen.setdefault("fig", fig))
-    figure.compare_figure(result, "unused.png")
+    monkeypatch.setattr(plot, "save", lambda fig, path: seen.setdefault("fig", fig))
+    plot.compare_figure(result, "unused.png")
     fig = seen["fig"]
     labels = [text.get_text() for text in fig.axes[0].get_legend().get_texts()]
     return fig._suptitle.get_text(), labels

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from somarm import tasks
-from somarm.benchmarks.rollouts import RolloutClock
 from somarm.io import atomic_write_json
+from somarm.perf.rollouts import RolloutClock
 from somarm.tasks import flight
 from somarm.tasks import throw as throw_module
 from somarm.validation import OneLineParser, check_int, whole_number
@@ -180,7 +180,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{flight.DEFAULT_TOLERANCE:g}, all steps in one model by time scaling; {flight.THREADS} thread(s); "
           "a batch in one model, landed throws leaving it (the staircase).")
     if driven:
-        from somarm.benchmarks import driven as driven_rows
+        from somarm.perf import driven as driven_rows
 
         driven_rows.print_rows(quick=args.quick, repeats=repeats)
     if args.json is not None:

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from somarm.benchmarks import tasks as bench
+from somarm.perf import tasks as bench
 
 
 def test_quick_benchmark_prints_a_row_per_task(capsys, tmp_path):
