@@ -3,7 +3,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from somarm.learners import presets
+from somarm.learners import choices, presets
 from somarm.learners.motoric import MotoricConfig
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig
@@ -28,11 +28,10 @@ def test_plus_presets_change_only_schedules_of_their_table_and_table1_plus_the_c
         assert {key for key in base if base[key] != plus[key]} == changed
         assert plus["response"] == "winner"
     assert presets.get("table1+").lambda_a.value(10**6) == 0.1 and presets.get("table1+").periodic_actions
-    assert any("periodic_actions" in choice for choice in presets.PRESETS["table1+"].choices)
     assert presets.get("table5+").epsilon.value(10**6) == 0.02
 
 
-def test_table2_plus_is_table2_on_circles_with_the_response_and_epsilon_chosen_on_tuning_seeds():
+def test_table2_plus_is_table2_on_circles_with_the_interpolated_response_and_a_slower_epsilon():
     base, plus = presets.get("table2").to_dict(), presets.get("table2+").to_dict()
     assert {key for key in base if base[key] != plus[key]} == {"periodic_actions", "response", "epsilon"}
     assert plus["periodic_actions"] is True and plus["response"] == "interpolated"
@@ -41,20 +40,15 @@ def test_table2_plus_is_table2_on_circles_with_the_response_and_epsilon_chosen_o
     # left without one; the same floor at the end of the run.
     assert epsilon.value(20_000) == pytest.approx(0.016) and table2.value(20_000) == 0.01
     assert epsilon.value(40_000) == epsilon.floor == table2.floor == 0.01
-    choices = presets.PRESETS["table2+"].choices
     assert presets.PRESETS["table2+"].task == "four_goals"
-    # The response and epsilon were chosen on seeds no report uses (the reports run seeds 0-4).
-    assert any("tuning seeds" in choice and "1001-1003" in choice for choice in choices)
-    assert any(choice.startswith("epsilon = 0.08/(t/5000 + 1)") and "1001-1008" in choice for choice in choices)
 
 
-def test_obstacle_preset_discounts_the_future_and_says_it_is_not_the_papers():
+def test_obstacle_preset_discounts_the_future_and_is_described_as_beyond_the_paper():
     preset = presets.PRESETS["obstacle"]
     assert preset.task == "reach2_obstacle" and preset.config.gamma == 0.9
     assert preset.config.input_shape == (20, 20) and preset.config.action_shape == (5, 5)
     assert preset.config.input_init is None and preset.n_steps == 500_000  # the observation bounds; long runs
     assert presets.describe("obstacle").startswith("beyond the paper")
-    assert any("paper ran no task with gamma > 0" in choice for choice in preset.choices)
 
 
 def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
@@ -62,7 +56,6 @@ def test_benchmark_presets_explore_by_optimism_over_a_frozen_torque_grid():
         preset = presets.PRESETS[name]
         c = preset.config
         assert preset.task.startswith("gym:") and presets.describe(name).startswith("beyond the paper")
-        assert any("seeds 100-199" in choice for choice in preset.choices)
         # no random units and no perturbations: optimistic initial values alone explore
         assert c.p.value(0) == 0 and c.epsilon.value(0) == 0
         assert c.action_init == "grid" and c.lambda_a.value(0) == 0
@@ -175,3 +168,26 @@ def test_the_suite_presets_are_the_invertedpendulum_recipe_with_one_map_over_eve
         assert (config.gamma, config.q_init, config.alpha) == (base.gamma, base.q_init, base.alpha)
     assert presets.get("dmc_2d").grid_span == 1.0
 
+
+
+def test_every_preset_has_its_choices_from_the_data_file_and_every_section_names_a_preset():
+    sections = choices.parse(choices.CHOICES_FILE.read_text(encoding="utf-8"))
+    assert list(sections) == list(presets.PRESETS)
+    for name, preset in presets.PRESETS.items():
+        assert preset.choices == sections[name] and preset.choices, name
+        for choice in preset.choices:  # one report line each: no line breaks, no doubled spaces
+            assert choice == choice.strip() and "\n" not in choice and "  " not in choice, (name, choice)
+
+
+def test_choices_join_continuations_and_refuse_a_stray_line_a_doubled_section_and_unmatched_names(tmp_path):
+    text = "intro, not read\n\n## a\n\n- one\n  two\n- three\n## b\n- four\n"
+    assert choices.parse(text) == {"a": ("one two", "three"), "b": ("four",)}
+    with pytest.raises(ValueError, match="line 3: 'stray' is neither a choice"):
+        choices.parse("## a\n- one\nstray\n")
+    with pytest.raises(ValueError, match="section 'a' named twice"):
+        choices.parse("## a\n- one\n## a\n")
+    path = tmp_path / "choices.md"
+    path.write_text("## a\n- one\n## c\n- two\n")
+    with pytest.raises(ValueError, match=r"presets without a section \['b'\], sections naming no preset \['c'\]"):
+        choices.read(["a", "b"], path)
+    assert choices.read(["a", "c"], path) == {"a": ("one",), "c": ("two",)}
