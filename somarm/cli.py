@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import os
 import sys
 from pathlib import Path
 
+from somarm import __version__
 from somarm.console import guard_standard_streams
+from somarm.helptext import PlainHelpFormatter
 from somarm.validation import OneLineParser, check_int, check_memory, whole_number
 
 __all__ = ["main"]
@@ -63,6 +66,7 @@ def _cmd_presets(args) -> int:
 def _cmd_train(args) -> int:
     from somarm import run
     from somarm.run.claim import claim
+    from somarm.run.names import run_folder
 
     if not args.view and (args.host is not None or args.port is not None):
         raise ValueError("--host and --port are the viewer's: give --view with them, or leave them out")
@@ -71,7 +75,7 @@ def _cmd_train(args) -> int:
     args.host = "127.0.0.1" if args.host is None else args.host
     config = run.from_options(args)
     group = run.RunGroup([config])  # built once: a bad preset, --set or --task-set fails before any output
-    out = _out_folder(args.out, f"runs/{config.task}__{config.learner}__seed{config.seed}")
+    out = _out_folder(args.out, f"runs/{run_folder(config.task, config.learner, config.seed)}")
     owner = claim(out, force=args.force)  # one writer per folder; earlier results only with --force
     try:
         return _train_into(out, group, args, owner)
@@ -181,6 +185,17 @@ def _cut_note(summary: dict, n_trials: int) -> str:
             "steps: --task-set evaluation_steps=N)")
 
 
+def _length_note(greedy: dict) -> str:
+    """What the mean episode length stands beside: where a task has a goal, a failed episode counts at the
+    step limit; where it has shortest paths, their mean. ``""`` for a task with neither (a Gymnasium task)."""
+    notes = []
+    if "greedy_success_rate" in greedy:  # only an episode that can fail to reach a goal counts at the limit
+        notes.append("a failed episode counts at the step limit")
+    if "shortest_mean_episode_length" in greedy:
+        notes.append(f"the shortest paths {greedy['shortest_mean_episode_length']:.2f}")
+    return f" ({'; '.join(notes)})" if notes else ""
+
+
 def _what_was_kept(result, owner, out: Path, extra: dict | None = None) -> str:
     if (extra or {}).get("greedy_cut"):
         return f"the trained run is written to {out} without its greedy evaluation (somarm evaluate scores it)"
@@ -204,12 +219,10 @@ def _cmd_evaluate(args) -> int:
         greedy = run.greedy_measures(learner, task, seed=seed)
         success = (f"success rate {greedy['greedy_success_rate']:.1%}; " if "greedy_success_rate" in greedy
                    else "")  # a Gymnasium task has no goal of its own
-        shortest = (f"; the shortest paths {greedy['shortest_mean_episode_length']:.2f}"
-                    if "shortest_mean_episode_length" in greedy else "")
         print(
             f"{name}: greedy mean return {greedy['greedy_mean_return']:+.4f}{_cut_note(greedy, learner.n_trials)} (sd "
             f"{greedy['greedy_sd_return']:.4f} over {learner.n_trials} trial(s)); {success}mean episode length "
-            f"{greedy['greedy_mean_episode_length']:.2f} steps (a failed episode counts at the step limit{shortest}); "
+            f"{greedy['greedy_mean_episode_length']:.2f} steps{_length_note(greedy)}; "
             f"{greedy['greedy_episodes']} greedy episodes per trial, seed {seed}"
         )
         return 0
@@ -265,6 +278,7 @@ def _cmd_compare(args) -> int:
     from somarm.peers import compare
     from somarm.run.claim import claim
     from somarm.run.config import parse_assignments
+    from somarm.run.names import folder_part
     from somarm.run.stopping import sigterm_as_interrupt
 
     config = compare.CompareConfig(
@@ -280,7 +294,7 @@ def _cmd_compare(args) -> int:
     )
     compare.check(config)
     cluster.check_engine(args.engine, args.ray_address)
-    out = _out_folder(args.out, f"compare/{config.task.replace(':', '-')}")
+    out = _out_folder(args.out, f"compare/{folder_part(config.task)}")
     owner = claim(out, force=args.force, resume=args.resume, what="a comparison")
     sigterm_as_interrupt()
     try:
@@ -323,8 +337,12 @@ def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     def complete(command: str) -> bool:
         return commands is None or command in commands
 
-    parser = OneLineParser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    parser = OneLineParser(prog="somarm", description="Self-organising-map reinforcement learning (Smith, 2002).",
+                           epilog="`somarm COMMAND --help` describes a command and its options.",
+                           formatter_class=PlainHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"somarm {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands", required=True,
+                                parser_class=functools.partial(OneLineParser, formatter_class=PlainHelpFormatter))
     sub.add_parser("tasks", help="list the registered tasks").set_defaults(func=_cmd_tasks)
     presets_cmd = sub.add_parser("presets", help="the paper's parameter tables; with a NAME, its settings")
     presets_cmd.add_argument("name", nargs="?", help="a preset: print its settings as --set KEY=VALUE lines")
@@ -442,6 +460,9 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_forward(f"somarm.perf.{argv[1]}", argv[2:])
         if argv[:1] == ["view"]:
             return _cmd_forward("somarm.viewer.cli", argv[1:])
+        if not argv:  # `somarm` alone introduces itself: usage and the commands, on stdout
+            _parser([]).print_help()
+            return 0
         args = _parser(argv[:1]).parse_args(argv)  # only the command named is built whole
         status = args.func(args)
         if args.command in _OUTPUT_COMMANDS and _output_lost():  # their output is what they are for

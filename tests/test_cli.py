@@ -353,6 +353,7 @@ def test_the_python_api_refuses_a_setting_of_the_wrong_type_in_one_line(field, v
 
 
 @pytest.mark.parametrize(("argv", "unwanted"), [
+    ([], ("numba", "mujoco", "dm_control", "matplotlib", "torch", "gymnasium", "ray")),
     (["--help"], ("numba", "mujoco", "dm_control", "matplotlib", "torch", "gymnasium", "ray")),
     (["presets"], ("mujoco", "dm_control", "matplotlib", "torch", "gymnasium", "ray")),
     (["tasks"], ("matplotlib", "torch", "gymnasium", "ray", "somarm.run", "somarm.sweep")),
@@ -400,3 +401,56 @@ def test_engine_ray_without_ray_names_the_extra_in_one_line(capsys, tmp_path, mo
         from somarm import cluster
 
         cluster.check_engine("ray", None)
+
+
+def test_somarm_alone_prints_its_usage_and_every_command(capsys):
+    from somarm.cli import _parser
+
+    assert main([]) == 0
+    shown = capsys.readouterr()
+    commands = _parser([])._subparsers._group_actions[0].choices
+    assert shown.out.startswith("usage: somarm") and shown.err == ""
+    assert all(f"\n    {name} " in shown.out or f"\n    {name}\n" in shown.out for name in commands), shown.out
+
+
+def test_version_prints_the_packages_version(capsys):
+    import somarm
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.strip() == f"somarm {somarm.__version__}"
+
+
+def _every_help():
+    from somarm.cli import _parser
+
+    yield []
+    yield from ([name] for name in _parser()._subparsers._group_actions[0].choices if name != "bench")
+    yield ["view"]
+
+
+@pytest.mark.parametrize("argv", list(_every_help()), ids=lambda argv: " ".join(argv) or "somarm")
+def test_help_is_plain_text_without_backticks(argv, capsys):
+    with pytest.raises(SystemExit):
+        main([*argv, "--help"])
+    shown = capsys.readouterr().out
+    assert shown.startswith("usage:") and "`" not in shown, shown
+
+
+def test_a_gym_run_folder_has_no_colon_and_an_old_one_is_still_read(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("gymnasium")
+    monkeypatch.chdir(tmp_path)
+    args = ["train", "gym:Pendulum-v1", "--steps", "200", "--block", "100", "--no-progress", "--no-figures",
+            "--task-set", "evaluation_steps=5"]
+    assert main(args) == 0
+    assert [p.name for p in (tmp_path / "runs").iterdir()] == ["gym-Pendulum-v1__somq__seed0"]
+    old = tmp_path / "runs" / "gym:Pendulum-v1__somq__seed0"  # the name earlier versions gave it
+    (tmp_path / "runs" / "gym-Pendulum-v1__somq__seed0").rename(old)
+    capsys.readouterr()
+    assert main(["evaluate", str(old)]) == 0
+    said = capsys.readouterr().out
+    assert said.startswith("gym:Pendulum-v1: greedy mean return")
+    # Pendulum's episodes have no goal and cannot fail: the length is not said to count failures
+    assert "failed episode" not in said, said
+

@@ -81,10 +81,11 @@ def greedy_episodes(learner: Learner, task: EpisodicTask, *, n_episodes: int = 1
 
     Returns:
       ``{"success_rate", "mean_length", "mean_return"}``, each ``(n_trials,)``: the fraction of
-      episodes that reach the goal (only for a task with a goal); the mean steps over all episodes, a failed episode counting at
-      the step limit (where ``run_episodes`` cuts it); and the mean undiscounted return per episode.
-      A trial that reaches the goal once in 100 episodes thus has a mean length near the step limit,
-      not the length of its one success. Also ``"lengths"`` and ``"success"``, ``(n_trials, n_episodes)``:
+      episodes that reach the goal (only for a task with a goal); the mean steps over all episodes;
+      and the mean undiscounted return per episode. On a task with a goal, an episode that never
+      reaches it counts at the step limit (where ``run_episodes`` cuts it), so a trial that reaches
+      the goal once in 100 episodes has a mean length near the step limit, not the length of its one
+      success; on a task without one (a Gymnasium task), an episode's length is where it ended. Also ``"lengths"`` and ``"success"``, ``(n_trials, n_episodes)``:
       every episode's steps and whether it reached the goal; and, for a task that caps its greedy
       episodes below their own end (a Gymnasium task's ``evaluation_steps``), ``"cut"``: whether the
       cap cut each.

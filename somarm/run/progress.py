@@ -61,15 +61,19 @@ def _is_terminal(stream: TextIO) -> bool:
 #: its values (``{"mean return, last 100 episodes": -150.2}``), one per scale of reward.
 Measures = float | dict[str, float]
 
+#: The name of a single value: the last block's mean, which summary.json's ``final_mean_reward`` (the mean
+#: over a final window of several blocks) is not, so the two are told apart by name.
+BLOCK_MEAN = "mean reward, last block"
+
 
 def _measures_text(measures: Measures) -> str:
-    named = {"mean reward": measures} if not isinstance(measures, dict) else measures
+    named = {BLOCK_MEAN: measures} if not isinstance(measures, dict) else measures
     return ", ".join(f"{name} {value:+.4f}" if math.isfinite(value) else f"{name}    -   "  # none measured yet
                      for name, value in named.items())
 
 
 class Progress:
-    """Draws ``label [###...] step/total  mean reward -0.123  12.3 s``.
+    """Draws ``label [###...] step/total  mean reward, last block -0.123  12.3 s``.
 
     What follows the steps is ``update``'s measures: the mean reward of the last block (one-step
     tasks), or each named value (an episodic task's mean return over its last finished episodes).

@@ -33,8 +33,8 @@ def greedy_measures(learner: Learner, task: BatchedTask, *, seed: int, n_observa
     ``greedy_episodes_cut`` and ``greedy_episode_cap`` (where the task's cap on greedy episodes cut
     some before their own end, as a Gymnasium task's ``evaluation_steps`` does: how many, over all
     trials, and the cap), and
-    ``greedy_mean_episode_length`` (steps over all episodes, a failed episode counting at the step
-    limit), ``greedy_episodes``, and beside the greedy length ``shortest_mean_episode_length``: the
+    ``greedy_mean_episode_length`` (steps over all episodes; on a task with a goal, an episode that
+    does not reach it counting at the step limit), ``greedy_episodes``, and beside the greedy length ``shortest_mean_episode_length``: the
     mean over the same episodes of the shortest path from each start (``task.shortest_lengths``; a search
     of some seconds, left out with ``shortest=False``, as a sweep, which ranks by the return, does).
 
@@ -120,7 +120,13 @@ def _number_or_none(x: float) -> float | None:
 
 
 def summary(result: RunResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The ``summary.json`` of a run: settings, steps, time, final rewards, then ``extra``."""
+    """The ``summary.json`` of a run: settings, steps, time, final rewards, then ``extra``.
+
+    ``final_mean_reward`` and ``final_sd_reward`` are the training reward over the last
+    ``final_window_steps`` steps (a tenth of the run, at most 1000 steps, in whole blocks): each
+    trial's mean over that window, then their mean and sd over trials. The progress line's ``mean
+    reward, last block`` is the last block's alone, so the two agree only where the window is one block.
+    """
     config = result.config
     window = min(1000, max(config.block, config.n_steps // 10))
     final = final_rewards(result.block_means, config.block, window)

@@ -17,6 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from somarm.helptext import RawPlainHelpFormatter
 from somarm.validation import OneLineParser, number, whole_number
 
 __all__ = ["main", "build_parser"]
@@ -29,8 +30,7 @@ MAX_GOALS = 200
 def build_parser() -> argparse.ArgumentParser:
     """The ``somarm view`` argument parser."""
     parser = OneLineParser(prog="somarm view", description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog="\n".join(__doc__.split("\n")[2:]))
+                           formatter_class=RawPlainHelpFormatter, epilog="\n".join(__doc__.split("\n")[2:]))
     parser.add_argument("task", help="task name (reach2, four_goals, reach20, throw, throw_distance, ...), or gym:ID "
                                      "of a Gymnasium MuJoCo environment")
     parser.add_argument("--run", default=None, help="run folder (config.json + learner.npz); default: untrained")
