@@ -160,7 +160,8 @@ def load(name: str, *, seed: int = 0, **params: Any):
 
 
 def threads() -> int:
-    """Threads the MuJoCo backend may use for a batch from this thread (``set_threads``; 1 in a lane)."""
+    """Threads the MuJoCo backend may use for a batch from this thread: ``set_threads``'s, or 1 under
+    ``pool.single_threaded`` (a share of a group split over processes)."""
     from somarm.tasks import flight
     from somarm.tasks.pool import threads_here
 
