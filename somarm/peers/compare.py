@@ -15,6 +15,8 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
+import math
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -24,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from somarm import __version__, tasks
-from somarm.io import atomic_write_json
+from somarm.io import atomic_write_json, make_folder, read_json
 from somarm.run import evaluation
 from somarm.tasks import gym_envs
 
@@ -409,22 +411,55 @@ def peer_budget(kind: str, config: CompareConfig) -> int:
     return config.samples
 
 
-def _earlier_seed(path: Path, fingerprint: dict, progress: bool):
+def _earlier_seed(path: Path, fingerprint: dict, progress: bool, n_rungs: int):
     """A seed's scores from an earlier run of the same comparison (``path``), or None where there is
     none, it was made with other settings, or it is damaged (then the seed is trained again)."""
-    if not path.exists():
+    if not os.path.lexists(path):
         return None
     try:
-        record = json.loads(path.read_text())
-        found = record["fingerprint"], record["values"], record["walls"], record["settings"]
-    except (OSError, ValueError, KeyError, TypeError):
-        print(f"{path} is damaged; training that seed again", file=sys.stderr, flush=True)
+        found = _seed_record(path, n_rungs)
+    except ValueError as exc:
+        print(f"{exc}; training that seed again", file=sys.stderr, flush=True)
         return None
     if found[0] != fingerprint:
         if progress:
             print(f"{path} was made with other settings; training that seed again", file=sys.stderr, flush=True)
         return None
     return found[1:]
+
+
+def _seed_record(path: Path, n_rungs: int) -> tuple[dict, list[float], list[float], dict]:
+    """A seed record's fingerprint, scores, training seconds and settings, checked as a whole: an object
+    with those four entries, ``n_rungs`` finite scores and as many finite, non-negative seconds.
+
+    Raises:
+      ValueError: one line naming the file and what is wrong with it.
+    """
+    where = f"{path} is damaged"
+    try:
+        record = read_json(path, max_bytes=_MAX_RECORD_BYTES)
+    except ValueError as exc:
+        raise ValueError(f"{where}: it {str(exc).removeprefix(str(path)).strip()}") from None
+    if not isinstance(record, dict):
+        raise ValueError(f"{where}: it holds a {type(record).__name__}, not a seed record (an object)")
+    missing = [k for k in ("fingerprint", "values", "walls", "settings") if k not in record]
+    if missing:
+        raise ValueError(f"{where}: it has no {', '.join(missing)}")
+    for name in ("fingerprint", "settings"):
+        if not isinstance(record[name], dict):
+            raise ValueError(f"{where}: its {name} is a {type(record[name]).__name__}, not an object")
+    for name, least in (("values", -math.inf), ("walls", 0.0)):
+        numbers = record[name]
+        if not (isinstance(numbers, list) and len(numbers) == n_rungs
+                and all(isinstance(x, (int, float)) and not isinstance(x, bool) and least <= x < math.inf
+                        for x in numbers)):
+            what = "finite numbers" if name == "values" else "finite numbers >= 0"
+            raise ValueError(f"{where}: its {name} are not {n_rungs} {what}")
+    return record["fingerprint"], record["values"], record["walls"], record["settings"]
+
+
+#: A seed record holds a few scores and settings: one far larger is not one.
+_MAX_RECORD_BYTES = 4 * 2**20
 
 
 #: The engine (and Ray address) of a comparison that names none: ``engine_of_parts`` sets it for
@@ -496,14 +531,15 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
         "somarm_version": __version__, "complete": False, "learners": {},
     }
     result.update({"episodes": config.episodes} if score.episodic else {"observations": config.observations})
-    (out / "seeds").mkdir(parents=True, exist_ok=True)
+    make_folder(out / "seeds", within=out)
     found: dict[tuple[str, int], tuple] = {}  # (kind, seed) -> (values, walls, settings)
     todo: list[tuple[str, int, dict]] = []  # (kind, seed, fingerprint)
     for kind, runner in plan.runners.items():
         described = runner.described()
         for seed in plan.seeds:
             fingerprint = plan.fingerprint(kind, seed, score, described)
-            earlier = _earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress) if resume else None
+            earlier = (_earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress, len(runner.rungs))
+                       if resume else None)
             if earlier is None:
                 todo.append((kind, seed, fingerprint))
             else:
@@ -514,11 +550,11 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
         """A unit's result: its seed record, its line, and compare.json with every learner now complete."""
         v, w, settings = unit_result
         atomic_write_json(out / "seeds" / f"{kind}-{seed}.json",
-                          {"fingerprint": fingerprint, "values": v, "walls": w, "settings": settings})
+                          {"fingerprint": fingerprint, "values": v, "walls": w, "settings": settings}, within=out)
         found[kind, seed] = (v, w, settings)
         _said(plan, kind, seed, score.metric, found[kind, seed], kept=False, progress=progress)
         _fill(result, found, plan, score.metric)
-        atomic_write_json(out / "compare.json", result)
+        atomic_write_json(out / "compare.json", result, within=out)
 
     if engine == "ray":
         units = [cluster.Unit(f"{kind} seed {seed}", run_unit, (plan, kind, seed), kind=kind)
@@ -535,7 +571,7 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
             keep(kind, seed, fingerprint, run_unit(plan, kind, seed))
     _fill(result, found, plan, score.metric)
     result["complete"] = True
-    atomic_write_json(out / "compare.json", result)
+    atomic_write_json(out / "compare.json", result, within=out)
     compare_figure(result, out / "compare.png")
     return result
 

@@ -24,6 +24,8 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+from somarm.io import make_folder, refuse_links
+
 __all__ = ["LOCK_NAME", "MANIFEST_NAME", "FolderClaim", "claim", "writer_of"]
 
 LOCK_NAME = ".somarm.lock"
@@ -53,12 +55,19 @@ def _files_under(root: Path) -> list[str]:
 
 def _write_manifest(path: Path, files: list[str]) -> None:
     tmp = path.with_name(path.name + ".tmp")
+    tmp.unlink(missing_ok=True)  # a link planted there is removed, never written through
     tmp.write_text(json.dumps({"files": files}, indent=1) + "\n")
     os.replace(tmp, path)
 
 
-def _move(src: Path, dst: Path) -> None:
-    dst.parent.mkdir(parents=True, exist_ok=True)
+def _move(src: Path, dst: Path, folder: Path) -> None:
+    """Rename ``src`` to ``dst`` inside ``folder``; a link at ``dst`` is replaced, a link standing for one of
+    ``dst``'s folders refused (``OSError``)."""
+    try:
+        refuse_links(src, within=folder)
+        make_folder(dst.parent, within=folder)
+    except ValueError as exc:
+        raise OSError(str(exc)) from None
     os.replace(src, dst)
 
 
@@ -75,13 +84,16 @@ def _prune_empty(folder: Path, files: list[str]) -> None:
 def _recover(folder: Path) -> None:
     """Finish or undo a swap that a killed process left, and drop an unfinished staging folder."""
     aside, staging = folder / _ASIDE, folder / _STAGING
+    for ours in (aside, staging):
+        if ours.is_symlink():  # not somarm's: a link there is removed, never followed
+            ours.unlink()
     if aside.is_dir():
         if (staging / MANIFEST_NAME).is_file():  # the new manifest never moved in: undo
             for name in _listed(staging):
                 if not (staging / name).exists():  # moved in already: take it out again
                     (folder / name).unlink(missing_ok=True)
             for name in _files_under(aside):
-                _move(aside / name, folder / name)
+                _move(aside / name, folder / name, folder)
         shutil.rmtree(aside)
     if staging.is_dir():
         shutil.rmtree(staging)
@@ -143,16 +155,16 @@ class FolderClaim:
                 raise ValueError(f"cannot put the new results in {self.folder}: {exc.strerror or exc}; "
                                  "the earlier results are kept") from None
             for name in new:  # unlisted, they are never removed by a later run, only kept beside
-                _move(staging / name, self.folder / name)
+                _move(staging / name, self.folder / name, self.folder)
             shutil.rmtree(staging, ignore_errors=True)
             self.staged = False
             return
         try:
             old = sorted(f for f in listed if (self.folder / f).is_file())  # moved aside, so a failed swap can undo
             for name in old:
-                _move(self.folder / name, aside / name)
+                _move(self.folder / name, aside / name, self.folder)
             for name in new:
-                _move(staging / name, self.folder / name)
+                _move(staging / name, self.folder / name, self.folder)
             os.replace(staging / MANIFEST_NAME, self.folder / MANIFEST_NAME)  # the new run is the folder's
         except OSError as exc:
             _recover(self.folder)
@@ -222,12 +234,15 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
     if folder.exists() and not folder.is_dir():
         raise ValueError(f"{flag} {folder} is a file; give a folder (new, or holding {what})")
     created = not folder.exists()
-    had_lock = (folder / LOCK_NAME).exists()
+    had_lock = os.path.lexists(folder / LOCK_NAME)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+        fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
     except OSError as exc:
         _leave_as_found(folder, created, had_lock)
+        if (folder / LOCK_NAME).is_symlink():
+            raise ValueError(f"{flag} {folder} holds {LOCK_NAME} as a symbolic link, which somarm never writes "
+                             "through; remove the link (or give another folder)") from None
         raise ValueError(f"{flag} {folder} is not writable: {exc.strerror or exc}") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -243,6 +258,9 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
         _recover(folder)
         existing = sorted(p.name for p in folder.iterdir() if p.name not in _OURS)
         if resume:  # in place from the start, so that what a killed run finished is there to go on with
+            if (link := _linked_folder(folder)) is not None:
+                raise ValueError(f"{flag} {folder} holds {link}, a symbolic link to a folder, and somarm never writes "
+                                 "through a link; remove the link (or give another folder)")
             held._before = frozenset(_files_under(folder))
             return held
         if existing and not force:
@@ -261,6 +279,15 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
         _leave_as_found(folder, created, had_lock)
         raise
     return held
+
+
+def _linked_folder(folder: Path) -> Path | None:
+    """The first symbolic link to a folder found inside ``folder`` (not followed), or None."""
+    for here, dirs, _ in os.walk(folder):
+        for name in dirs:
+            if os.path.islink(os.path.join(here, name)):
+                return Path(here) / name
+    return None
 
 
 def _pid_in(fd: int) -> str:

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import Literal
 
-from somarm.io import atomic_write_json
+from somarm.io import atomic_write_json, make_folder, read_json
 from somarm.sweep import store
 from somarm.sweep.spec import SweepSpec, config_key
 from somarm.sweep.work import plan_chunks, validate_points
@@ -104,7 +104,7 @@ def _holds(folder: Path, described: dict) -> bool:
     """Whether ``folder`` holds this sweep or a narrower one of the same settings and swept keys (its
     ``sweep.json``), so that running it resumes in place."""
     try:
-        held = json.loads((folder / "sweep.json").read_text())
+        held = read_json(folder / "sweep.json")
         ours = json.loads(json.dumps(described))
         same_keys = [a["key"] for a in held["axes"]] == [a["key"] for a in ours["axes"]]
         return same_keys and all(held.get(k) == v for k, v in ours.items() if k not in (*_WIDENING, "points"))
@@ -115,11 +115,8 @@ def _holds(folder: Path, described: dict) -> bool:
 def _sweep_into(out: Path, spec: SweepSpec, points: list, described: dict, *, engine: str, workers: int | None,
                 address: str | None, max_group_bytes: float, progress: bool, figure: bool) -> SweepOutcome:
     """Run what ``out`` lacks of the sweep and write its tables (``run_sweep``'s work, in a claimed folder)."""
-    try:
-        (out / "points").mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ValueError(f"cannot create sweep folder {out}: {exc.strerror or exc}") from None
-    atomic_write_json(out / "sweep.json", described)
+    make_folder(out / "points", within=out)
+    atomic_write_json(out / "sweep.json", described, within=out)
     items = [(i, seed, spec.config(p, seed)) for i, p in enumerate(points) for seed in spec.seeds()]
     done = store.load_rows(out)
     # A failed row is retried on a rerun (the failure may have been the machine's, not the point's).

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import shlex
 from pathlib import Path
@@ -18,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.io import atomic_write_json, atomic_write_text
+from somarm.io import atomic_write_json, atomic_write_text, make_folder, read_json
 from somarm.sweep.spec import TASK_PREFIX, SweepSpec, config_key, preset_value, same_value
 from somarm.sweep.work import METRICS, greedy_name, point_label
 
@@ -27,9 +26,12 @@ __all__ = ["Table", "save_row", "load_rows", "write_outputs", "summary_line"]
 
 def save_row(out: Path, row: dict[str, Any]) -> None:
     """Keep one finished (or failed) row on disk; the point index is the sweep's, not stored."""
-    folder = out / "points"
-    folder.mkdir(parents=True, exist_ok=True)
-    atomic_write_json(folder / f"{row['key']}.json", {k: v for k, v in row.items() if k != "point"})
+    folder = make_folder(out / "points", within=out)
+    atomic_write_json(folder / f"{row['key']}.json", {k: v for k, v in row.items() if k != "point"}, within=out)
+
+
+#: A row holds a few numbers and settings: a file far larger is not one.
+_MAX_ROW_BYTES = 2**20
 
 
 def load_rows(out: Path) -> dict[str, dict[str, Any]]:
@@ -37,8 +39,8 @@ def load_rows(out: Path) -> dict[str, dict[str, Any]]:
     rows = {}
     for path in sorted((out / "points").glob("*.json")):
         try:
-            row = json.loads(path.read_text())
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            row = read_json(path, max_bytes=_MAX_ROW_BYTES)
+        except ValueError:
             continue
         complete = isinstance(row, dict) and row.get("key") == path.stem and "error" in row
         finished = complete and all(isinstance(row.get(m), float) for m in METRICS) and \
@@ -180,7 +182,7 @@ def summary_line(table: Table) -> str:
 
 def write_outputs(out: Path, table: Table, *, figure: bool = True) -> str:
     """Write results.csv, best.json and sweep.png for the rows so far; return the summary line."""
-    atomic_write_text(out / "results.csv", table.csv_text())
+    atomic_write_text(out / "results.csv", table.csv_text(), within=out)
     best = table.best()
     line = summary_line(table)
     if best is not None:
@@ -192,7 +194,7 @@ def write_outputs(out: Path, table: Table, *, figure: bool = True) -> str:
             "task_set": [f"{k}={v}" for k, v in task.items()] + [f"{k}={v}" for k, v in fixed_task.items()],
             "command": shlex.join(argv),
             "summary": line,
-        })
+        }, within=out)
     else:  # a best.json left from an earlier, narrower sweep would no longer be true
         (out / "best.json").unlink(missing_ok=True)
     if figure and table.rows:

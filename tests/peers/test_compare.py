@@ -200,7 +200,8 @@ def test_a_killed_comparison_goes_on_with_resume_keeping_its_finished_seeds(tmp_
     # A damaged record, and records made with other settings, are trained again, each said in one line.
     (out / "seeds" / "tabular-2.json").write_text("{")
     assert main(argv) == 0
-    assert f"{out / 'seeds' / 'tabular-2.json'} is damaged; training that seed again" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"{out / 'seeds' / 'tabular-2.json'} is damaged: " in err and "training that seed again" in err
     assert main([*argv[:9], "40", *argv[10:]]) == 0
     assert "was made with other settings; training that seed again" in capsys.readouterr().err
     assert json.loads((out / "compare.json").read_text())["observations"] == 40
