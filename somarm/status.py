@@ -13,7 +13,7 @@ events (an experiment started or finished) as they happen and the status line on
 
 A piece of work's fraction and the time left are estimates, marked with ``~``: a piece does not
 know its own length beforehand, so each has an expected duration (for the reproduction's
-experiments, the one measured on a 2-core machine: ``somarm/reproduce/durations.json``; for a
+experiments, the measured ones of ``somarm/reproduce/durations.json``; for a
 cluster's units, the mean of the finished units of the same kind). Scaled by how this run has kept
 to them so far (the finished pieces' measured over expected seconds, or a running one's that is
 already past its expected time), they give the running pieces' fractions and, placed on the free

@@ -5,8 +5,7 @@ figures), so N of them can run at once on N cores. N worker processes are starte
 (``spawn``), once: each takes the next experiment, the longest first, whenever it is free (a
 process per experiment would pay a few seconds of imports every time). A worker runs its physics
 on as many threads as there are cores (while two run the system shares the cores; the last one
-left gets them all: measured on 2 cores, the paper's experiments took 288 s so against 312 s with
-one thread per worker). It sends back each finished section, and this process alone writes the
+left gets them all). It sends back each finished section, and this process alone writes the
 report, in the paper's order, after each one. A worker's results equal a run in this process:
 every experiment draws from its own seeds. While it trains, a worker sends its training parts'
 progress too (``somarm.run.progress.report_to``), which this process shows in one status line
@@ -43,7 +42,7 @@ __all__ = ["LONGEST_FIRST", "LONGEST_FIRST_QUICK", "expected_durations", "run"]
 #: ones fill the other workers' time (names not listed start last, in the order given).
 LONGEST_FIRST = ("more_inputs", "delayed_reward", "beyond", "neighbourhood_q", "throw_maps", "four_goals",
                  "reach2", "reach20", "throw", "peers")
-#: The same for ``--quick``, whose run lengths are cut by different factors (measured on 2 cores).
+#: The same for ``--quick``, whose run lengths are cut by different factors (the order of durations.json's quick times).
 LONGEST_FIRST_QUICK = ("throw_maps", "beyond", "more_inputs", "delayed_reward", "neighbourhood_q", "throw",
                        "four_goals", "reach2", "reach20", "peers")
 #: Seconds a stopped worker gets to finish its step and exit before it is killed.
@@ -51,8 +50,8 @@ _GRACE_S = 60.0
 
 
 def expected_durations(quick: bool, n_seeds: int) -> dict[str, float]:
-    """Each experiment's expected wall time in seconds on 2 cores under ``--jobs 2`` (``durations.json``),
-    times ``n_seeds``; experiments without a measure are left out."""
+    """Each experiment's expected wall time in seconds: the measured wall times of ``durations.json`` (its
+    own note names the machine), times ``n_seeds``; experiments without a measure are left out."""
     measured = json.loads((Path(__file__).with_name("durations.json")).read_text())
     return {name: seconds * n_seeds for name, seconds in measured["quick" if quick else "full"].items()}
 
