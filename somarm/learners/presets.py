@@ -1,29 +1,27 @@
 """The paper's parameter tables by name, so an experiment can say which table it uses.
 
-``get("table1")`` is the ``SOMQConfig`` of Table 1; ``PRESETS["table1"]`` also holds the run
-facts the paper states (task, figure, trials, averaging window). Where a table is silent the
-value used is this project's choice; why, each preset's ``choices`` say, read from
-``preset_choices.md`` beside this module (this module holds the values only).
-
-``table1+``, ``table2+`` and ``table5+`` are not the paper's: they change settings of Tables 1, 2 and
-5 for the runs beyond the paper. The other presets past the tables (``obstacle``, the Gymnasium
-benchmarks' and the DeepMind Control Suite's) are this project's throughout.
-
-The Motoric Map of Fig. 13 B (``get_motoric("table2")``) takes every number it shares with
-SOM-Q from Table 2 (``MotoricConfig.from_table``).
+``get("table1")`` is the ``SOMQConfig`` of Table 1; ``PRESETS["table1"]`` also holds the run facts the
+paper states (task, figure, trials, averaging window). Where a table is silent the value is this
+project's choice; why, each preset's ``choices`` say, read from ``preset_choices.md`` beside this module,
+which holds the values only. ``table1+``, ``table2+`` and ``table5+`` change Tables 1, 2 and 5 for the
+runs beyond the paper; ``obstacle``, the Gymnasium benchmarks' and the Control Suite's are this
+project's throughout. Fig. 13 B's Motoric Map (``get_motoric("table2")``) takes Table 2's numbers.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 from somarm.learners import choices as _choices
 from somarm.learners.motoric import MotoricConfig
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig
 
-__all__ = ["Preset", "PRESETS", "get", "get_motoric", "config_for", "describe", "motoric_from_somq"]
+__all__ = ["Preset", "PRESETS", "get", "get_motoric", "config_for", "describe", "motoric_from_somq",
+           "task_params_of"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +43,8 @@ class Preset:
     """Steps per trial, where the paper states it."""
     choices: tuple[str, ...] = ()
     """Values this project chose where the table is silent, and why (``preset_choices.md``)."""
+    task_params: dict[str, Any] = dataclasses.field(default_factory=dict)
+    """What the preset asks of its own task (``task_params_of``): how its observations are scaled."""
 
 
 def _table1() -> Preset:
@@ -52,8 +52,7 @@ def _table1() -> Preset:
     config = SOMQConfig(
         input_shape=(50,), action_shape=(50,), alpha=Schedule(1.0, f), lambda_s=Schedule(1.0, f),
         lambda_a=Schedule(1.0, f), n_s=Schedule(20.0, f), n_a=Schedule(20.0, f), p=Schedule(1.0, f),
-        epsilon=Schedule(0.1, f), input_init=(0.0, 1.0), epsilon_relative=True,
-    )
+        epsilon=Schedule(0.1, f), input_init=(0.0, 1.0), epsilon_relative=True)
     return Preset("table1", "Table 1: reach2 (Figs. 7-10), 50x1 input and action maps, f = 1/(t/1000+1)",
                   config, "reach2", "7, 8, 9, 10 (and 11 with reach20)", 20, 1000)
 
@@ -63,8 +62,7 @@ def _table2() -> Preset:
     config = SOMQConfig(
         input_shape=(10, 10), action_shape=(8,), alpha=Schedule(1.0, f, 0.1), lambda_s=Schedule(1.0, f),
         lambda_a=Schedule(1.0, f, 0.1), n_s=Schedule(10.0, f), n_a=Schedule(3.0, f), p=Schedule(0.25, f),
-        epsilon=Schedule(0.1, f, 0.01), input_init=(0.0, 1.0), epsilon_relative=True,
-    )
+        epsilon=Schedule(0.1, f, 0.01), input_init=(0.0, 1.0), epsilon_relative=True)
     text = "Table 2: four_goals (Figs. 13-15), 10x10 input, 8x1 actions, f = 1/(t/500+1), floors"
     return Preset("table2", text, config, "four_goals", "13 A, 14, 15", 20, 100)
 
@@ -74,8 +72,7 @@ def _table4() -> Preset:
     config = SOMQConfig(
         input_shape=(1,), action_shape=(30,), alpha=Schedule(1.0, f, 0.05), lambda_s=Schedule(1.0, f),
         lambda_a=Schedule(1.0, f, 0.1), n_s=Schedule(0.0), n_a=Schedule(15.0, f, 2.0), p=Schedule(1.0, f, 0.5),
-        epsilon=Schedule(1.0, f, 0.1),
-    )
+        epsilon=Schedule(1.0, f, 0.1))
     text = "Table 4: throw (Fig. 17), one input unit, 30x1 actions, f = 0.999^throw, floors"
     return Preset("table4", text, config, "throw", "17", 1, None, n_steps=4000)
 
@@ -85,8 +82,7 @@ def _table5() -> Preset:
     config = SOMQConfig(
         input_shape=(30,), action_shape=(30,), alpha=Schedule(1.0, f), lambda_s=Schedule(0.3, f),
         lambda_a=Schedule(1.0, f), n_s=Schedule(15.0, f), n_a=Schedule(25.0, f), p=Schedule(1.0, f),
-        epsilon=Schedule(1.0, f),
-    )
+        epsilon=Schedule(1.0, f))
     text = "Table 5: throw_distance (Figs. 21, 24 +NL/0.9985), 30x1 maps, f = 0.9985^throw"
     figures = "21, 24 (-NL: neighbourhood_q=false; -NL/0.9997: also decay=exp:0.9997)"
     return Preset("table5", text, config, "throw_distance", figures, 20, 100)
@@ -98,8 +94,7 @@ def _table7(name: str) -> Preset:
     config = SOMQConfig(
         input_shape=(30,) if single else (10, 10), action_shape=(30,), alpha=Schedule(1.0, f),
         lambda_s=Schedule(0.3, f), lambda_a=Schedule(1.0, f), n_s=Schedule(7.0, f), n_a=Schedule(7.0, f),
-        p=Schedule(1.0, f), epsilon=Schedule(1.0, f),
-    )
+        p=Schedule(1.0, f), epsilon=Schedule(1.0, f))
     if single:
         text = "Table 7, experiment A: throw_distance (Fig. 25 A), 30x1 input, N_S = 7 f, f = 0.9985^throw"
     else:
@@ -144,15 +139,21 @@ def _obstacle() -> Preset:
     config = SOMQConfig(
         input_shape=(20, 20), action_shape=(5, 5), alpha=Schedule(1.0, f, 0.1), lambda_s=Schedule(1.0, f, 0.01),
         lambda_a=Schedule(0.0), n_s=Schedule(2.0, f), n_a=Schedule(0.0), p=Schedule(1.0, f, 0.2),
-        epsilon=Schedule(0.5, f, 0.05), gamma=0.9, epsilon_relative=True, action_init="grid",
-    )
+        epsilon=Schedule(0.5, f, 0.05), gamma=0.9, epsilon_relative=True, action_init="grid")
     text = ("beyond the paper: reach2_obstacle, gamma 0.9, 20x20 input map over the angles and the goal, "
             "a fixed 5x5 grid of target changes")
     return Preset("obstacle", text, config, "reach2_obstacle", "none (the report's delayed-reward part)", 10, 1000,
                   n_steps=500_000)
 
 
-def _benchmark(name: str, env_id: str, changes: dict[str, object]) -> Preset:
+#: InvertedPendulum-v5's scaling (``tasks.gym_envs.scaling_how``): the cart's rail [-1, 1] and the
+#: pole's ending angle +-0.2 instead of the random-action estimate; the cart's position widened 32
+#: times, its velocity 4 and the pole's angular velocity 2 (so they count less in the map's distance).
+_INVERTED_PENDULUM_SCALING = {"observation_ranges": {"0": [-1.0, 1.0], "1": [-0.2, 0.2]},
+                              "observation_widened": {"0": 32.0, "2": 4.0, "3": 2.0}}
+
+
+def _benchmark(name: str, env_id: str, changes: dict[str, object], task_params: dict | None = None) -> Preset:
     """A preset for a Gymnasium benchmark (``gym:ID``): the common recipe with ``changes``; the run
     length is the task's (``tasks.gym_envs.BENCHMARKS``), not the preset's."""
     slow = InverseDecay(20_000.0)
@@ -160,10 +161,9 @@ def _benchmark(name: str, env_id: str, changes: dict[str, object]) -> Preset:
         input_shape=(20, 20), action_shape=(3,), alpha=Schedule(1.0, slow, 0.05),
         lambda_s=Schedule(1.0, InverseDecay(2000.0)), lambda_a=Schedule(0.0), n_s=Schedule(1.0, slow),
         n_a=Schedule(0.0), p=Schedule(0.0), epsilon=Schedule(0.0), gamma=0.98, epsilon_relative=True,
-        input_init=(0.0, 1.0), response="interpolated", action_init="grid",
-    )
+        input_init=(0.0, 1.0), response="interpolated", action_init="grid")
     return Preset(name, f"beyond the paper: gym:{env_id}, Gymnasium's benchmark", dataclasses.replace(config, **changes),
-                  f"gym:{env_id}", "none (the report's benchmarks part)", 5, None)
+                  f"gym:{env_id}", "none (the report's benchmarks part)", 5, None, task_params=task_params or {})
 
 
 def _benchmarks() -> tuple[Preset, ...]:
@@ -178,7 +178,7 @@ def _benchmarks() -> tuple[Preset, ...]:
         "gamma": 0.99, "q_init": 30.0, "action_shape": (4,), "lambda_s": Schedule(0.0), "n_s": Schedule(0.0)})
     invertedpendulum = _benchmark("invertedpendulum", "InvertedPendulum-v5", {
         "gamma": 0.995, "q_init": 200.0, "input_groups": "1,2,3", "action_shape": (11,), "grid_span": 1.0 / 6.0,
-        "n_a": Schedule(2.0, InverseDecay(20_000.0))})
+        "n_a": Schedule(2.0, InverseDecay(20_000.0))}, _INVERTED_PENDULUM_SCALING)
     reacher = _benchmark("reacher", "Reacher-v5", {
         "gamma": 0.95, "action_shape": (3, 3), "grid_span": 0.1, "input_groups": "pairs", "input_shape": (10, 10),
         "k_nearest": 3, "n_a": Schedule(2.0)})
@@ -212,11 +212,7 @@ def _preset(name: str) -> Preset:
 
 
 def get(name: str) -> SOMQConfig:
-    """The ``SOMQConfig`` of a preset (``table1``, ``table2``, ..., ``reacher``; see ``PRESETS``).
-
-    Raises:
-      ValueError: an unknown name (the message lists the names).
-    """
+    """The ``SOMQConfig`` of a preset (``PRESETS``); an unknown name is a ValueError listing the names."""
     return _preset(name).config
 
 
@@ -225,26 +221,27 @@ def describe(name: str) -> str:
     return _preset(name).description
 
 
+def task_params_of(name: str, task: str) -> dict[str, Any]:
+    """The task parameters preset ``name`` asks of ``task``: its ``task_params`` where ``task`` is its own
+    task, else none (a run's own ``--task-set`` values go over them)."""
+    preset = _preset(name)
+    return copy.deepcopy(preset.task_params) if task == preset.task else {}
+
+
 def motoric_from_somq(config: SOMQConfig) -> MotoricConfig:
     """The Motoric Map counterpart of a SOM-Q config (``MotoricConfig.from_table``)."""
     return MotoricConfig.from_table(config)
 
 
 def get_motoric(name: str) -> MotoricConfig:
-    """The Motoric Map config matching a table (``get_motoric("table2")`` is Fig. 13 B's).
-
-    Raises:
-      ValueError: an unknown name (the message lists the names).
-    """
+    """The Motoric Map config matching a table (``get_motoric("table2")`` is Fig. 13 B's); an unknown
+    name is a ValueError listing the names."""
     return motoric_from_somq(get(name))
 
 
 def config_for(kind: str, name: str):
-    """The config of learner ``kind`` (see ``somarm.learners.LEARNERS``) for preset ``name``.
-
-    Raises:
-      ValueError: an unknown kind or name (the message lists what is allowed).
-    """
+    """The config of learner ``kind`` (``somarm.learners.LEARNERS``) for preset ``name``; an unknown kind
+    or name is a ValueError listing what is allowed."""
     from somarm.learners import config_class
 
     return config_class(kind).from_table(get(name))

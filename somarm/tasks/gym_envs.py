@@ -17,7 +17,12 @@ each observation mapped linearly from ``[low, high]`` onto ``[0, 1]`` per dimens
 estimated once, as the 1% and 99% quantiles of observations under uniformly random actions
 (widened by a tenth of their range), from a stream of the run's seed. The estimate is a task
 parameter (``observation_low``, ``observation_high``), so the run's ``config.json`` keeps it and
-a loaded run reuses it. Actions are the action ``Box``'s, in its own units.
+a loaded run reuses it. How the bounds are found can be told as data (a learner's preset asks it of
+its task: ``somarm.learners.presets.task_params_of``): ``observation_ranges`` (``{"1": [-0.2, 0.2]}``)
+takes a dimension's range as given instead of the estimate, and ``observation_widened``
+(``{"3": 2.0}``) widens a dimension's range about its middle, so that it counts less in an input
+map's distance; both are used up in filling in the bounds, which are what ``config.json`` keeps.
+Actions are the action ``Box``'s, in its own units.
 
 Any other ``--task-set KEY=VALUE`` is a keyword argument of ``gymnasium.make`` (``g=5.0`` for
 Pendulum, ``max_episode_steps=500``), tried at set-up on one copy of the environment (made, reset and
@@ -49,8 +54,8 @@ from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
 
-__all__ = ["PREFIX", "DMC_PREFIX", "env_task", "suite_names", "env_id_of", "name_of", "make_env", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "DMC_BENCHMARKS", "EVALUATION_STEPS", "KNOWN_RANGES",
-           "WIDENED", "estimate_bounds"]
+__all__ = ["PREFIX", "DMC_PREFIX", "env_task", "suite_names", "env_id_of", "name_of", "make_env", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "DMC_BENCHMARKS", "EVALUATION_STEPS",
+           "estimate_bounds", "scaling_how"]
 
 #: What a Gymnasium task name starts with.
 PREFIX = "gym:"
@@ -60,6 +65,8 @@ DMC_PREFIX = "dmc:"
 _DMC_NAMESPACE = "somarm-dmc/"
 #: Keys of ``--task-set`` that are the task's own (the rest go to ``gymnasium.make``).
 _OWN = ("observation_low", "observation_high", "evaluation_steps")
+#: Keys that say how the scaling bounds are found (``GymRecord.complete`` uses them up).
+_HOW = ("observation_ranges", "observation_widened")
 #: Texts of ``--task-set`` that read as the float they spell (JSON knows only NaN and Infinity).
 _FLOAT_WORDS = ("nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 #: Random-action steps behind a bounds estimate, and the quantiles taken.
@@ -90,23 +97,12 @@ DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:point_mass-easy")},
 }
 
-#: Observation dimensions whose range the environment itself fixes though its Box is infinite, used
-#: instead of the random-action estimate: InvertedPendulum-v5's cart runs on a rail of [-1, 1] (the
-#: slider joint's range) and an episode ends once the pole leans more than 0.2 rad. Random actions
-#: tip the pole over within a few steps, so they see the cart within about +-0.12 of the middle;
-#: scaled from that, every state of a balancing cart beyond it falls on the input map's edge.
-KNOWN_RANGES: dict[str, dict[int, tuple[float, float]]] = {
-    "InvertedPendulum-v5": {0: (-1.0, 1.0), 1: (-0.2, 0.2)},
-}
-
-#: Observation dimensions that count less in the input map's distance, as factors by which their
-#: scaling range (known or estimated) is widened about its middle: a dimension widened k times spans
-#: 1/k of the unit box, so the map spends fewer units along it. InvertedPendulum-v5 (this project's
-#: choice, tuned on seeds 100-103: docs/benchmarks/invertedpendulum/TUNING.md): the cart's position 32
-#: times (the invertedpendulum preset's map does not see it: input_groups=1,2,3), its velocity 4 times
-#: and the pole's angular velocity twice (``learners.presets``' invertedpendulum).
-WIDENED: dict[str, dict[int, float]] = {
-    "InvertedPendulum-v5": {0: 32.0, 2: 4.0, 3: 2.0},
+#: Until every caller passes ``observation_ranges`` and ``observation_widened`` from the preset
+#: (``somarm.learners.presets.task_params_of``), the invertedpendulum preset's, used where none are
+#: given; the learner side owns them (``Preset.task_params``), and these go once the callers pass them.
+_UNTIL_PASSED: dict[str, dict[str, dict[str, Any]]] = {
+    "InvertedPendulum-v5": {"observation_ranges": {"0": [-1.0, 1.0], "1": [-0.2, 0.2]},
+                            "observation_widened": {"0": 32.0, "2": 4.0, "3": 2.0}},
 }
 
 
@@ -383,14 +379,56 @@ def _check_bounds(params: GymParams, size: int) -> None:
         raise ValueError("observation_low and observation_high must be finite with high > low in every dimension")
 
 
-def estimate_bounds(params: GymParams, seed: int, *, env: Any = None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def scaling_how(given: dict[str, Any], size: int, name: str) -> tuple[dict[int, tuple[float, float]], dict[int, float]]:
+    """``observation_ranges`` and ``observation_widened`` of ``given`` (JSON objects of dimension ->
+    ``[low, high]`` and dimension -> factor) as ``{dimension: (low, high)}`` and ``{dimension: factor}``.
+
+    Raises:
+      ValueError: not an object, a dimension outside ``0..size-1``, a range not finite with high > low,
+        a factor not finite and > 0 (one line naming the key).
+    """
+    found: list[dict[int, Any]] = []
+    for key, width in (("observation_ranges", 2), ("observation_widened", 1)):
+        value = given.get(key) or {}
+        what = "[low, high]" if width == 2 else "a factor > 0"
+        if not isinstance(value, dict):
+            raise ValueError(f"{key} of {name} takes a JSON object of observation dimension -> {what}, got {value!r}")
+        out: dict[int, Any] = {}
+        for dim, entry in value.items():
+            numbers = list(entry) if isinstance(entry, (list, tuple)) else [entry]
+            ok = str(dim).isdigit() and int(dim) < size and len(numbers) == width and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in numbers)
+            if not ok or (numbers[-1] <= numbers[0] if width == 2 else numbers[0] <= 0):
+                raise ValueError(f"{key} of {name} takes observation dimensions 0 to {size - 1}, each with {what}, "
+                                 f"got {dim!r}: {entry!r}")
+            out[int(dim)] = (float(numbers[0]), float(numbers[1])) if width == 2 else float(numbers[0])
+        found.append(out)
+    return found[0], found[1]
+
+
+def _told(low: np.ndarray, high: np.ndarray, ranges: dict[int, tuple[float, float]],
+          widened: dict[int, float]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Bounds with the ranges given put in, then the dimensions widened about their middles."""
+    low, high = low.copy(), high.copy()
+    for dim, (known_low, known_high) in ranges.items():
+        low[dim], high[dim] = known_low, known_high
+    for dim, factor in widened.items():
+        middle, half = (low[dim] + high[dim]) / 2.0, (high[dim] - low[dim]) / 2.0
+        low[dim], high[dim] = middle - factor * half, middle + factor * half
+    return tuple(float(v) for v in low), tuple(float(v) for v in high)
+
+
+def estimate_bounds(params: GymParams, seed: int, *, env: Any = None,
+                    how: dict[str, Any] | None = None) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Scaling bounds where the observation Box is infinite: the 1% and 99% quantiles of
     ``_ESTIMATE_STEPS`` observations under uniformly random actions (episodes reset with seeds of the
-    run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite,
-    and the environment's own range where ``KNOWN_RANGES`` gives one; then the dimensions ``WIDENED``
-    names widened about their middles. With ``env`` (an environment object, wrapped after
+    run's "scaling" stream), widened by a tenth of their range; the Box's own bound where it is finite.
+    ``how`` (``observation_ranges``, ``observation_widened``; ``scaling_how``) then puts in the ranges
+    given and widens the dimensions named. With ``env`` (an environment object, wrapped after
     ``gymnasium.make``), a copy of it is stepped and its own observation Box taken instead."""
     facts = describe(params.env_id, _kwargs_json(params))
+    ranges, widened = scaling_how(_UNTIL_PASSED.get(params.env_id, {}) if how is None else how,
+                                  facts["observation_low"].size, name_of(params.env_id))
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["scaling"],))))
     if env is not None:
         facts = {**facts, **box_of(env.observation_space)}
@@ -420,12 +458,7 @@ def estimate_bounds(params: GymParams, seed: int, *, env: Any = None) -> tuple[t
     box_low, box_high = facts["observation_low"], facts["observation_high"]
     low = np.where(np.isfinite(box_low), box_low, low_q - margin)
     high = np.where(np.isfinite(box_high), box_high, high_q + margin)
-    for dim, (known_low, known_high) in KNOWN_RANGES.get(params.env_id, {}).items():
-        low[dim], high[dim] = known_low, known_high
-    for dim, factor in WIDENED.get(params.env_id, {}).items():
-        middle, half = (low[dim] + high[dim]) / 2.0, (high[dim] - low[dim]) / 2.0
-        low[dim], high[dim] = middle - factor * half, middle + factor * half
-    return tuple(float(v) for v in low), tuple(float(v) for v in high)
+    return _told(low, high, ranges, widened)
 
 
 class GymTask(TaskBase):
@@ -641,6 +674,7 @@ class GymRecord(TaskRecord):
                 value = given[key]
                 if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                     raise ValueError(f"{key} of {self.name} takes a whole number of steps >= 1, got {value!r}")
+        how = {key: given.pop(key) for key in _HOW if key in given}
         own = {key: given.pop(key) for key in _OWN if key in given}
         for key in ("observation_low", "observation_high"):
             value = own.get(key)
@@ -652,6 +686,7 @@ class GymRecord(TaskRecord):
                            evaluation_steps=own.get("evaluation_steps"))
         facts = describe(params.env_id, _kwargs_json(params))
         _check_bounds(params, facts["observation_low"].size)
+        scaling_how(how, facts["observation_low"].size, self.name)
         return params
 
     @property
@@ -670,14 +705,23 @@ class GymRecord(TaskRecord):
 
     def complete(self, params: dict[str, Any], seed: int) -> dict[str, Any]:
         """``params`` with the scaling bounds filled in where the observation Box is unbounded (estimated
-        once, from the run's seed: ``estimate_bounds``), so the run's ``config.json`` keeps them."""
+        once, from the run's seed: ``estimate_bounds``) or ``observation_ranges`` or ``observation_widened``
+        say how to find them (then used up), so the run's ``config.json`` keeps the bounds. Bounds given
+        are kept as they are."""
         built = self.params_from(params)
+        given = {key: params[key] for key in _HOW if key in params}
+        rest = {key: value for key, value in params.items() if key not in _HOW}
+        how = given if given else _UNTIL_PASSED.get(built.env_id, {})
         facts = describe(built.env_id, _kwargs_json(built))
         finite = np.isfinite(facts["observation_low"]).all() and np.isfinite(facts["observation_high"]).all()
-        if built.observation_low is not None or finite:
-            return dict(params)
-        low, high = estimate_bounds(built, seed)
-        return {**params, "observation_low": list(low), "observation_high": list(high)}
+        if built.observation_low is not None or (finite and not any(how.values())):
+            return rest
+        if finite:
+            low, high = _told(facts["observation_low"], facts["observation_high"],
+                              *scaling_how(how, facts["observation_low"].size, self.name))
+        else:
+            low, high = estimate_bounds(built, seed, how=how)
+        return {**rest, "observation_low": list(low), "observation_high": list(high)}
 
 
 @functools.lru_cache(maxsize=64)

@@ -191,3 +191,13 @@ def test_choices_join_continuations_and_refuse_a_stray_line_a_doubled_section_an
     with pytest.raises(ValueError, match=r"presets without a section \['b'\], sections naming no preset \['c'\]"):
         choices.read(["a", "b"], path)
     assert choices.read(["a", "c"], path) == {"a": ("one",), "c": ("two",)}
+
+
+def test_a_preset_asks_its_own_task_alone_for_its_scaling_as_a_copy():
+    asked = presets.task_params_of("invertedpendulum", "gym:InvertedPendulum-v5")
+    assert asked == presets.PRESETS["invertedpendulum"].task_params and asked
+    asked["observation_widened"]["0"] = 1.0  # the caller's copy; the preset is unchanged
+    assert presets.PRESETS["invertedpendulum"].task_params["observation_widened"]["0"] != 1.0
+    assert presets.task_params_of("invertedpendulum", "gym:Pendulum-v1") == {}
+    assert all(presets.task_params_of(name, preset.task) == {} for name, preset in presets.PRESETS.items()
+               if name != "invertedpendulum")

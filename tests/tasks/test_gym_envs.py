@@ -150,8 +150,8 @@ def test_observations_are_scaled_from_the_box_or_from_an_estimate_kept_in_config
     config = RunConfig(task="gym:InvertedPendulum-v5", n_steps=200, block=100, seed=4).resolved()
     low, high = np.array(config.task_params["observation_low"]), np.array(config.task_params["observation_high"])
     assert low.shape == (4,) and np.all(high > low) and np.all(np.isfinite([low, high]))
-    # The cart's rail and the pole's ending angle are the environment's own; the velocities are estimated;
-    # the cart's position and velocity count 1/32 and the pole's angular velocity 1/2 (gym_envs.WIDENED).
+    # The cart's rail and the pole's ending angle are the preset's ranges; the velocities are estimated;
+    # the cart's position counts 1/32 (the preset's observation_widened).
     np.testing.assert_array_equal(low[:2], [-32.0, -0.2])
     np.testing.assert_array_equal(high[:2], [32.0, 0.2])
     result = run.train(config, progress=False)
@@ -250,18 +250,55 @@ def test_a_box_scaling_maps_its_bounds_onto_the_unit_box_and_back_as_the_task_do
     task.close()
 
 
-def test_a_widened_dimension_keeps_its_middle_and_spans_its_factor_times_the_range(monkeypatch):
+def test_a_widened_dimension_keeps_its_middle_and_spans_its_factor_times_the_range():
     from somarm.tasks import gym_envs
 
     params = gym_envs.GymParams("InvertedPendulum-v5")
-    factors = [gym_envs.WIDENED["InvertedPendulum-v5"].get(dim, 1.0) for dim in range(4)]
-    assert factors != [1.0] * 4
-    low, high = (np.array(b) for b in gym_envs.estimate_bounds(params, 3))
-    monkeypatch.setattr(gym_envs, "WIDENED", {})
-    plain_low, plain_high = (np.array(b) for b in gym_envs.estimate_bounds(params, 3))
-    np.testing.assert_allclose((high - low) / (plain_high - plain_low), factors)
-    np.testing.assert_allclose(low + high, plain_low + plain_high, atol=1e-12)
-    np.testing.assert_array_equal(plain_low[:2], [-1.0, -0.2])  # the rail and the ending angle
+    how = {"observation_ranges": {"1": [-0.2, 0.2]}, "observation_widened": {"0": 32.0, "2": 4.0, "3": 2.0}}
+    low, high = (np.array(b) for b in gym_envs.estimate_bounds(params, 3, how=how))
+    plain_low, plain_high = (np.array(b) for b in gym_envs.estimate_bounds(params, 3, how={}))
+    given_low, given_high = (np.array(b) for b in gym_envs.estimate_bounds(
+        params, 3, how={"observation_ranges": how["observation_ranges"]}))
+    np.testing.assert_allclose((high - low) / (given_high - given_low), [32.0, 1.0, 4.0, 2.0])
+    np.testing.assert_allclose(low + high, given_low + given_high, atol=1e-12)
+    np.testing.assert_array_equal([given_low[1], given_high[1]], [-0.2, 0.2])  # the range given, not the estimate
+    assert plain_high[1] != 0.2  # random actions see the pole only within its first few steps of falling
+    np.testing.assert_array_equal(np.delete(given_low, 1), np.delete(plain_low, 1))
+
+
+def test_the_preset_passes_its_scaling_to_its_task_as_data_and_the_bounds_are_what_config_json_keeps():
+    from somarm.learners import presets
+    from somarm.tasks import gym_envs
+
+    task = "gym:InvertedPendulum-v5"
+    record = tasks.record(task)
+    asked = presets.task_params_of(record.preset, task)
+    assert set(asked) == {"observation_ranges", "observation_widened"}
+    completed = record.complete(asked, seed=4)
+    # Used up in filling in the bounds: config.json keeps the bounds alone, as it always has.
+    assert set(completed) == {"observation_low", "observation_high"}
+    estimated = gym_envs.estimate_bounds(gym_envs.GymParams("InvertedPendulum-v5"), 4, how=asked)
+    assert (tuple(completed["observation_low"]), tuple(completed["observation_high"])) == estimated
+    # Bounds given win over how to find them.
+    given = {"observation_low": [-1.0] * 4, "observation_high": [1.0] * 4}
+    assert record.complete({**asked, **given}, seed=4) == given
+    # A finite Box takes them too (no estimate): Pendulum's angular velocity widened twice about 0.
+    pendulum = tasks.record("gym:Pendulum-v1").complete({"observation_widened": {"2": 2.0}}, seed=0)
+    assert pendulum == {"observation_low": [-1.0, -1.0, -16.0], "observation_high": [1.0, 1.0, 16.0]}
+    assert tasks.record("gym:Pendulum-v1").complete({}, seed=0) == {}
+
+
+@pytest.mark.parametrize(("given", "match"), [
+    ({"observation_ranges": [[0, -1, 1]]}, "observation_ranges of gym:Pendulum-v1 takes a JSON object"),
+    ({"observation_ranges": {"3": [-1, 1]}}, r"takes observation dimensions 0 to 2, each with \[low, high\], got '3'"),
+    ({"observation_ranges": {"0": [1, -1]}}, r"each with \[low, high\], got '0': \[1, -1\]"),
+    ({"observation_widened": {"1": 0}}, "observation_widened of gym:Pendulum-v1 takes observation dimensions 0 to 2, "
+                                        "each with a factor > 0, got '1': 0"),
+    ({"observation_widened": {"x": 2}}, "got 'x'"),
+])
+def test_how_to_scale_refuses_what_is_no_dimension_range_or_factor_in_one_line(given, match):
+    with pytest.raises(ValueError, match=match):
+        RunConfig(task="gym:Pendulum-v1", n_steps=100, block=100, task_params=given).resolved()
 
 
 def test_a_box_bound_as_large_as_float32_allows_is_estimated_like_an_infinite_one():
