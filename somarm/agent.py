@@ -101,12 +101,64 @@ class _Curves:
 _HISTORY = ("_blocks", "_squares", "_episodes", "_wall_time", "_origin", "_cannot_learn")
 
 
+#: The policy names SB3 users pass first. SOMQ has one policy, its maps, and takes "MlpPolicy" (SB3's for
+#: Box observations, the only kind SOMQ learns from) as a name of it; images and dicts it cannot learn from.
+_POLICY_NAMES = ("MlpPolicy",)
+_OTHER_POLICIES = ("CnnPolicy", "MultiInputPolicy")
+
+
+def _env_of(policy: Any, env: Any) -> Any:
+    """The environment of ``SOMQ(env)`` or SB3's ``SOMQ(policy, env)``.
+
+    Raises:
+      ValueError: a policy SOMQ cannot be, a policy name without an environment, or nothing (one line).
+    """
+    if env is None:
+        if isinstance(policy, str) and policy in _POLICY_NAMES + _OTHER_POLICIES:
+            raise ValueError(f"SOMQ({policy!r}) names a policy: give the environment too, "
+                             f"SOMQ({policy!r}, \"Pendulum-v1\") or SOMQ(\"Pendulum-v1\")")
+        if policy is None:
+            raise ValueError("SOMQ needs an environment: give an environment, its Gymnasium id or a task name, "
+                             "SOMQ(\"Pendulum-v1\")")
+        return policy
+    if not (isinstance(policy, str) and policy in _POLICY_NAMES):
+        raise ValueError(f"SOMQ learns one policy, its maps, over Box observations: give policy 'MlpPolicy' (SB3's "
+                         f"name for it) or none, got policy {policy!r}")
+    return env
+
+
 class SOMQ:
     """SOM-Q (Smith 2002) on a Gymnasium environment or a somarm task, in SB3's shape.
 
+    ``SOMQ(env)``, or SB3's ``SOMQ("MlpPolicy", env)``: SOM-Q's policy is its input and action maps
+    and their Q-table, built from the preset, so the policy name only stands where SB3 code puts one.
+    ``"MlpPolicy"`` (SB3's name for a policy over Box observations, the only observations SOM-Q
+    learns from) is taken and ignored; ``"CnnPolicy"``, ``"MultiInputPolicy"`` and policy classes are
+    refused, since no network is built.
+
+    Budget in samples, as in SB3: ``total_timesteps`` counts the samples of each trial. SOM-Q takes
+    far more samples than TD3 or SAC, each far cheaper (a fraction of a millisecond against tens).
+    Each benchmark's preset was scored at its run length, and a shorter ``learn`` learns less:
+
+    ======================== ========= =============================================================
+    environment              samples   seconds (docs/benchmarks/*/REPORT.md: samples x ms per sample)
+    ======================== ========= =============================================================
+    Pendulum-v1              500,000   about 98; the mean return passes -200 after 200,000 (45 s)
+    MountainCarContinuous-v0 200,000   about 27; the mean return passes 90 after 100,000 (13 s)
+    InvertedPendulum-v5      100,000   about 19
+    Reacher-v5               200,000   about 135
+    dmc:DOMAIN-TASK          100,000   13 to 56 (the six suite tasks with a preset)
+    ======================== ========= =============================================================
+
     Args:
+      policy: ``"MlpPolicy"`` (ignored) before the environment as SB3 writes it, or the environment
+        itself when it comes first and alone.
       env: a Gymnasium id (``"Pendulum-v1"``), ``"gym:ID"``, a somarm task name (``"reach2"``) or a
         Gymnasium environment made with ``gymnasium.make``, wrapped or not (trained in as given).
+      verbose: 0 (default) says nothing; 1 or 2 draws ``learn``'s progress line on stderr (the steps,
+        the mean return of the last 100 episodes or the mean reward of the last block, the seconds;
+        in place on a terminal, a line per tenth of the run in a log) and prints one line on stdout
+        when ``learn`` ends.
       seed: the run's seed (every random number derives from it).
       n_trials: independent learners trained side by side.
       preset: a parameter table (``somarm presets``); default the task's.
@@ -115,19 +167,25 @@ class SOMQ:
       **settings: learner settings changed from the preset, typed (``epsilon=0.2``, ``gamma=0.99``).
 
     Raises:
-      ValueError: an unknown environment, wrappers that change the action Box or the observation's
-        shape, or a bad setting (one line); ``MissingExtra`` (an ``ImportError`` as well) where
-        Gymnasium is not installed.
+      ValueError: an unknown environment, a policy other than ``"MlpPolicy"``, a ``verbose`` other
+        than 0, 1 or 2, wrappers that change the action Box or the observation's shape, or a bad
+        setting (one line); ``MissingExtra`` (an ``ImportError`` as well) where Gymnasium is not
+        installed.
     """
 
-    def __init__(self, env: Any, *, seed: int = 0, n_trials: int = 1, preset: str | None = None,
-                 env_kwargs: dict[str, Any] | None = None, learner: str = "somq", **settings: Any) -> None:
+    def __init__(self, policy: Any = None, env: Any = None, *, verbose: int = 0, seed: int = 0, n_trials: int = 1,
+                 preset: str | None = None, env_kwargs: dict[str, Any] | None = None, learner: str = "somq",
+                 **settings: Any) -> None:
+        env = _env_of(policy, env)
+        if isinstance(verbose, bool) or verbose not in (0, 1, 2):
+            raise ValueError(f"verbose must be 0, 1 or 2 (SB3's levels), got {verbose!r}")
         task, kwargs, given = task_name(env)
         params = {**kwargs, **(env_kwargs or {})}
         if given is not None and "observation_low" not in params:
             params.update(bounds_of(given, task, params, seed))
         config = RunConfig(task=task, learner=learner, preset=preset, overrides=dict(settings),
                            task_params=params, n_trials=n_trials, seed=seed)
+        self.verbose = verbose  #: 0 quiet; 1 or 2: learn's progress line and a closing line
         self._start(config.resolved(), env=given)
 
     def _start(self, config: RunConfig, learner: Learner | None = None, env: Any = None) -> None:
@@ -163,9 +221,9 @@ class SOMQ:
           callback: Stable-Baselines3's callbacks (a ``BaseCallback``, ``EvalCallback``,
             ``CheckpointCallback``, ``CallbackList``, a list of them, or a function), called as SB3
             calls them (``somarm.callbacks``); an ``on_step`` that returns False ends ``learn``.
-          log_interval, tb_log_name: SB3's, taken so that SB3 code runs, and not used (SOMQ logs
-            nothing; its curves go to the run folder ``save`` writes).
-          progress_bar: draw a progress line on stderr.
+          log_interval, tb_log_name: SB3's, taken so that SB3 code runs, and not used (SOMQ writes no
+            log files; its curves go to the run folder ``save`` writes, and ``verbose`` shows progress).
+          progress_bar: draw a progress line on stderr (as ``verbose`` 1 or 2 does).
           reset_num_timesteps: count ``num_timesteps`` from 0 again (SB3's default); False goes on
             counting. The learner's schedules follow its own step either way.
 
@@ -194,7 +252,8 @@ class SOMQ:
         self._learning = _Curves(block, self.config.n_trials, hook)
         try:
             curves = loop(self.task, [self.learner], [slice(0, self.config.n_trials)], n_steps=steps, block=block,
-                          progress=progress_bar, label=f"{self.config.task}/SOMQ", episode_log=self._log,
+                          progress=progress_bar or self.verbose > 0, label=f"{self.config.task}/SOMQ",
+                          episode_log=self._log,
                           on_step=self._learning)
             parts = self._learning.parts()
         finally:
@@ -210,6 +269,9 @@ class SOMQ:
             self._episodes.append(shifted)
         self._wall_time += curves.wall_time
         self.interrupted = curves.interrupted and not (hook is not None and hook.stopped)
+        if self.verbose:
+            print(f"SOMQ on {self.config.task}: {curves.steps_done} steps x {self.config.n_trials} trial(s) in "
+                  f"{curves.wall_time:.1f} s (num_timesteps {self.num_timesteps})", flush=True)
         if self.interrupted:
             warnings.warn(f"SOMQ.learn was stopped by a signal after {curves.steps_done} of {steps} steps; the "
                           f"model keeps what it learned (num_timesteps {done})", LearningInterrupted, stacklevel=2)
@@ -352,24 +414,44 @@ class SOMQ:
                         np.concatenate([n for _, _, _, n in ended]).astype(np.int64))
 
     def save(self, path: str | Path) -> Path:
-        """Write a run folder (``learner.npz``, ``config.json``, ``curves.npz``, ``summary.json``, figures)
-        that ``SOMQ.load``, ``somarm evaluate`` and ``somarm view`` read.
+        """Write the model: ``NAME.zip`` as one zip file, as SB3 saves, any other path as a run folder.
 
-        The folder is claimed as ``somarm train --force`` claims it: locked while the files are written
-        (another process writing there is refused), written beside the earlier results and swapped in
-        only when complete, so a failed save keeps the earlier model whole; files somarm did not write
-        stay.
+        A run folder holds ``learner.npz``, ``config.json``, ``curves.npz``, ``summary.json`` and the
+        figures; ``SOMQ.load``, ``somarm evaluate`` and ``somarm view`` read it. It is claimed as
+        ``somarm train --force`` claims it: locked while the files are written (another process
+        writing there is refused), written beside the earlier results and swapped in only when
+        complete, so a failed save keeps the earlier model whole; files somarm did not write stay.
+
+        A ``.zip`` file holds the same files but the figures (``somarm.run.archive``); ``SOMQ.load``
+        and ``somarm evaluate`` read it. It is written under a temporary name and renamed, so a failed
+        save keeps the earlier file whole. Its folder is made where missing, as SB3 makes it.
+
+        Returns:
+          The folder or the file written.
 
         Raises:
-          ValueError: the folder cannot be written, or another process is writing it (one line).
+          ValueError: an empty path, a folder or file that cannot be written, or a folder another
+            process is writing (one line).
         """
         from somarm.run.claim import claim
 
+        if not str(path).strip():
+            raise ValueError("SOMQ.save needs a path: a folder (\"runs/pendulum\") or a file (\"pendulum.zip\"), "
+                             f"got {str(path)!r}")
+        path = Path(path)
         result = self._result()
         # Saved by a callback in the middle of learn (CheckpointCallback), the model is written without
         # the greedy evaluation, which would cost its episodes at every checkpoint.
         extra = run.greedy_summary(result) if result.steps_done and self._learning is None else {}
-        owner = claim(Path(path), force=True, flag="path", what="a saved model")
+        if path.suffix == ".zip" and not path.is_dir():  # a folder of that name is an earlier save's: kept a folder
+            import tempfile
+
+            from somarm.run import archive
+
+            with tempfile.TemporaryDirectory(prefix="somarm-save-") as folder:
+                run.write(result, folder, figures=False, extra_summary=extra)
+                return archive.pack(Path(folder), path)
+        owner = claim(path, force=True, flag="path", what="a saved model")
         try:
             run.write_claimed(result, owner, extra_summary=extra)
         finally:
@@ -378,18 +460,38 @@ class SOMQ:
 
     @classmethod
     def load(cls, path: str | Path, env: Any = None) -> SOMQ:
-        """A model from a run folder (``save``'s, or ``somarm train``'s); with ``env``, one that learns and
-        is evaluated in that environment (``set_env``). ``NAME.zip``, SB3's name, finds the folder
-        ``NAME`` where there is no ``NAME.zip``.
+        """A model from a run folder (``save``'s, or ``somarm train``'s) or a ``.zip`` file ``save`` wrote;
+        with ``env``, one that learns and is evaluated in that environment (``set_env``). As SB3's
+        ``load``, ``NAME`` finds ``NAME.zip`` where there is no ``NAME``; and ``NAME.zip`` finds the
+        folder ``NAME`` where there is no ``NAME.zip``.
 
         Raises:
-          ValueError: not a run folder, or a damaged one, or an ``env`` ``set_env`` refuses (one line).
+          ValueError: neither a run folder nor a zip file of one, a damaged one, or an ``env``
+            ``set_env`` refuses (one line).
         """
+        from somarm.run import archive
+
         path = Path(path)
         if not path.exists() and path.suffix == ".zip" and path.with_suffix("").is_dir():
-            path = path.with_suffix("")  # SB3's name for what SOMQ.save wrote without the suffix
+            path = path.with_suffix("")  # SB3's name for a folder SOMQ.save wrote without the suffix
+        elif not path.exists() and path.suffix != ".zip" and path.with_name(path.name + ".zip").is_file():
+            path = path.with_name(path.name + ".zip")  # SB3's load adds the suffix its save added
+        if not archive.is_archive(path):
+            return cls._load_folder(path, env)
+        with archive.unpacked(path) as folder:
+            try:
+                model = cls._load_folder(folder, env)
+            except ValueError as exc:  # named by the file the user gave, not the temporary folder
+                raise ValueError(str(exc).replace(str(folder), str(path))) from None
+        if model._cannot_learn is not None:
+            model._cannot_learn = model._cannot_learn.replace(str(folder), str(path))
+        return model
+
+    @classmethod
+    def _load_folder(cls, path: Path, env: Any) -> SOMQ:
         config, learner = run.load(path)
         model = cls.__new__(cls)
+        model.verbose = 0
         model._start(config, learner)
         if learner.t:
             model._read_history(path)

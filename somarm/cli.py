@@ -204,13 +204,27 @@ def _what_was_kept(result, owner, out: Path, extra: dict | None = None) -> str:
     return f"partial results written to {out}"
 
 
+def _load_run(path: str):
+    """``run.load`` of a run folder, or of a ``.zip`` file ``SOMQ.save`` wrote (errors name the file)."""
+    from somarm import run
+    from somarm.run import archive
+
+    if not archive.is_archive(path):
+        return run.load(path)
+    with archive.unpacked(Path(path)) as folder:
+        try:
+            return run.load(folder)
+        except ValueError as exc:
+            raise ValueError(str(exc).replace(str(folder), str(path))) from None
+
+
 def _cmd_evaluate(args) -> int:
     from somarm import run, tasks
     from somarm.run import evaluation
     from somarm.run.config import parse_assignments
 
     check_int("--observations", args.observations)
-    config, learner = run.load(args.run)
+    config, learner = _load_run(args.run)
     changed = tasks.parse_params(config.task, parse_assignments(args.task_set, "--task-set"))
     seed = config.seed if args.seed is None else args.seed  # the run's own: the number summary.json has
     task = run.task_for(config, learner, changed)  # four_goals evaluates in the learned phase
@@ -363,7 +377,7 @@ def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     train.set_defaults(func=_cmd_train)
 
     evaluate = sub.add_parser("evaluate", help="greedy mean reward of a trained run (an episodic task's: mean return)")
-    evaluate.add_argument("run", help="run folder written by `somarm train`")
+    evaluate.add_argument("run", help="run folder written by `somarm train` (or a .zip file SOMQ.save wrote)")
     evaluate.add_argument("--observations", type=whole_number, default=1000,
                           help="fresh observations (1000); an episodic task runs 100 greedy episodes per trial")
     evaluate.add_argument("--seed", type=whole_number,
