@@ -306,13 +306,13 @@ def _cmd_compare(args) -> int:
         episodes=args.episodes,
         task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
     )
-    compare.check(config)
+    plan = compare.make_plan(config)  # checked and resolved once, before the folder is claimed
     cluster.check_engine(args.engine, args.ray_address)
     out = _out_folder(args.out, f"compare/{folder_part(config.task)}")
     owner = claim(out, force=args.force, resume=args.resume, what="a comparison")
     sigterm_as_interrupt()
     try:
-        compare.compare(config, owner.path, progress=not args.no_progress, resume=args.resume, engine=args.engine,
+        compare.compare(plan, owner.path, progress=not args.no_progress, resume=args.resume, engine=args.engine,
                         address=args.ray_address)
         owner.commit()
     except BaseException:

@@ -454,3 +454,14 @@ def test_a_gym_run_folder_has_no_colon_and_an_old_one_is_still_read(tmp_path, ca
     # Pendulum's episodes have no goal and cannot fail: the length is not said to count failures
     assert "failed episode" not in said, said
 
+
+
+def test_compare_plans_the_comparison_once(tmp_path, monkeypatch):
+    from somarm.peers import compare
+
+    made = []
+    real = compare.make_plan
+    monkeypatch.setattr(compare, "make_plan", lambda config: made.append(config) or real(config))
+    assert main(["compare", "reach2", "--learners", "somq", "--samples", "100", "--seeds", "1", "--no-progress",
+                 "--out", str(tmp_path / "c")]) == 0
+    assert len(made) == 1
