@@ -167,8 +167,9 @@ def atomic_write_json(path: str | os.PathLike, obj: Any, *, within: str | os.Pat
                              within=within)
 
 
-def read_json(path: str | os.PathLike, *, max_bytes: int = MAX_JSON_BYTES) -> Any:
-    """Read a JSON file somarm wrote, strictly: a regular file (not a link, a device or a pipe) of at most
+def read_json(path: str | os.PathLike, *, max_bytes: int = MAX_JSON_BYTES, follow_links: bool = False) -> Any:
+    """Read a JSON file somarm wrote, strictly: a regular file (not a device or a pipe; with
+    ``follow_links`` false, not a link either) of at most
     ``max_bytes``, nested no deeper than Python's recursion limit, with its ``non_finite`` values put back.
 
     Raises:
@@ -176,7 +177,7 @@ def read_json(path: str | os.PathLike, *, max_bytes: int = MAX_JSON_BYTES) -> An
     """
     path = Path(path)
     try:
-        info = os.lstat(path)
+        info = os.stat(path) if follow_links else os.lstat(path)
         if stat.S_ISLNK(info.st_mode):
             raise ValueError(f"{path} is a symbolic link, not a file somarm wrote")
         if not stat.S_ISREG(info.st_mode):
@@ -190,7 +191,7 @@ def read_json(path: str | os.PathLike, *, max_bytes: int = MAX_JSON_BYTES) -> An
     except UnicodeDecodeError:
         raise ValueError(f"{path} is not UTF-8 text") from None
     except json.JSONDecodeError as exc:
-        raise ValueError(f"{path} is not JSON: {exc}") from None
+        raise ValueError(f"{path} is not readable JSON: {exc}") from None
     except RecursionError:
         raise ValueError(f"{path} is nested too deeply to be a file somarm wrote") from None
     if isinstance(data, dict) and isinstance(flags := data.get(NON_FINITE), dict):

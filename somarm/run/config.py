@@ -133,8 +133,8 @@ class RunConfig:
         _check_blocks(resolved.n_steps, resolved.block)
         for trial_id in [] if resolved.trial_ids is None else list(resolved.trial_ids):
             check_int("--trial-ids", trial_id, minimum=0)
-        ids = resolved.trial_ids_array().tolist()
-        if resolved.trial_ids is not None:
+        if resolved.trial_ids is not None:  # a list given is in memory already; range(n_trials) is never listed
+            ids = resolved.trial_ids_array().tolist()
             if len(set(ids)) != len(ids):
                 raise ValueError(f"trial ids must differ from each other (a trial runs once), got {ids}")
             resolved = dataclasses.replace(resolved, trial_ids=ids)

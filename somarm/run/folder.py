@@ -5,20 +5,20 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from somarm import __version__
-from somarm.io import atomic_save_npz, atomic_write_json
+from somarm.io import atomic_save_npz, atomic_write_json, read_json
 from somarm.protocols import BatchedTask, Learner
 from somarm.run.build import make_task
 from somarm.run.claim import FolderClaim, writer_of
 from somarm.run.config import RunConfig
 from somarm.run.group import RunResult
 from somarm.run.summary import summary
+from somarm.tasks.loadable import check_loadable
 
 __all__ = ["write", "write_claimed", "write_summary", "load", "task_for"]
 
@@ -127,14 +127,11 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     for name in ("config.json", "learner.npz"):
         if not (out / name).is_file():
             raise ValueError(f"{out} is not a run folder: {name} is missing")
-    try:
-        data = json.loads((out / "config.json").read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{out / 'config.json'} is not readable JSON: {exc}") from None
-    except RecursionError:
-        raise ValueError(f"{out / 'config.json'} is not a run's config: its JSON is nested too deeply") from None
+    data = read_json(out / "config.json", max_bytes=_MAX_CONFIG_BYTES, follow_links=True)
     if isinstance(data, dict):
         data.pop("somarm_version", None)
+        # A folder is data: its task name is checked before anything it names is imported.
+        check_loadable(data.get("task"), where=str(out / "config.json"))
     try:
         config = RunConfig.from_dict(data).resolved()  # the same checks as `train` (a seed >= 0, ...)
     except (TypeError, ValueError) as exc:
@@ -143,6 +140,10 @@ def load(out_dir: str | Path) -> tuple[RunConfig, Learner]:
     _check_learner_fits(config, learner, out / "learner.npz")
     _check_settings_fit(config.learner_config.to_dict(), learner.config.to_dict(), out / "learner.npz")
     return config, learner
+
+
+#: A run's config.json holds its settings: a file far larger is not one.
+_MAX_CONFIG_BYTES = 4 * 2**20
 
 
 def _check_settings_fit(wanted: dict[str, Any], held: dict[str, Any], path: Path) -> None:
@@ -158,6 +159,8 @@ def _check_learner_fits(config: RunConfig, learner: Learner, path: Path) -> None
     where = f"{path} does not belong to {path.parent / 'config.json'}"
     if learner.kind != config.learner:
         raise ValueError(f"{where}: it holds a {learner.kind} learner, the config says {config.learner}")
+    if learner.n_trials != config.n_trials:  # counted before any list of trials is built
+        raise ValueError(f"{where}: it holds {learner.n_trials} trial(s), the config says {config.n_trials}")
     if learner.seed != config.seed or learner.trial_ids.tolist() != config.trial_ids_array().tolist():
         raise ValueError(f"{where}: its seed and trials ({learner.seed}, {learner.trial_ids.tolist()}) differ "
                          f"from the config's ({config.seed}, {config.trial_ids_array().tolist()})")
