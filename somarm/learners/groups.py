@@ -116,6 +116,49 @@ def _summed(q, units, phi, values):
 
 
 @numba.njit(cache=True, nogil=True)
+def deviation(x, weights, group, mid, span, out):
+    """The observation's place round one unit, each dimension over its box's span: ``(x_d - c_d) / span_d``
+    into ``out (obs_dim,)``, ``c_d`` the unit's weight in the dimensions its map sees (``group``, -1 padded)
+    and the box's middle ``mid`` in the others. Returns ``|out|^2``."""
+    for d in range(out.shape[0]):
+        out[d] = (x[d] - mid[d]) / span[d]
+    for i in range(group.shape[0]):
+        d = group[i]
+        if d >= 0:
+            out[d] = (x[d] - weights[i]) / span[d]
+    total = 0.0
+    for d in range(out.shape[0]):
+        total += out[d] * out[d]
+    return total
+
+
+@numba.njit(cache=True, nogil=True)
+def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, values):
+    """``_summed`` with local linear units: unit u answers ``q[u, a] + slopes[u, a] . z_u`` (``deviation``)."""
+    for a in range(q.shape[1]):
+        values[a] = 0.0
+    for g in range(units.shape[0]):
+        for i in range(units.shape[1]):
+            if phi[g, i] != 0.0:
+                u = units[g, i]
+                deviation(x, weights[u], groups[g], mid, span, z)
+                for a in range(q.shape[1]):
+                    total = q[u, a]
+                    for d in range(z.shape[0]):
+                        total += slopes[u, a, d] * z[d]
+                    values[a] += phi[g, i] * total
+
+
+@numba.njit(cache=True, nogil=True)
+def _summed_any(q, slopes, linear, units, phi, x, weights, groups, mid, span, z, values):
+    """``_summed`` or, with ``linear``, ``_summed_linear``."""
+    if linear:
+        _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, values)
+    else:
+        _summed(q, units, phi, values)
+
+
+@numba.njit(cache=True, nogil=True)
 def _parabola_shift(values, unit, shape, weights, out):
     """Add to ``out`` the shift of action unit ``unit`` to the top of the parabola through the summed Q
     of it and its two grid neighbours, along each axis of the action grid ``shape`` (at most half a step)."""
@@ -160,12 +203,14 @@ def _greedy(values, tie):
 
 
 @numba.njit(cache=True, nogil=True)
-def act_kernel(observations, input_weights, action_weights, q, groups, shapes, k, rows, p, epsilon, low, high, wrap,
-               gaussian, interpolated, action_shape, units, phi, chosen, actions):
+def act_kernel(observations, input_weights, action_weights, q, slopes, linear, mid, span, groups, shapes, k, rows, p,
+               epsilon, low, high, wrap, gaussian, interpolated, action_shape, units, phi, chosen, actions):
     """Steps 1 to 5 for every trial: fills ``units``/``phi`` ``(n_trials, G, k)``, ``chosen`` ``(n_trials,)``
-    and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring)."""
+    and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring; ``slopes``
+    ``(n_trials, G * n_units, n_action_units, obs_dim)`` read only with ``linear``)."""
     n_a = q.shape[2]
     values = np.empty(n_a)
+    z = np.empty(observations.shape[1])
     part = np.empty(groups.shape[1])
     order = np.empty(k + 1, dtype=np.int64)
     squared = np.empty(k + 1)
@@ -176,7 +221,8 @@ def act_kernel(observations, input_weights, action_weights, q, groups, shapes, k
         if exploring:
             unit = min(int(row[1] * n_a), n_a - 1)
         else:
-            _summed(q[trial], units[trial], phi[trial], values)
+            _summed_any(q[trial], slopes[trial], linear, units[trial], phi[trial], observations[trial],
+                        input_weights[trial], groups, mid, span, z, values)
             unit = _greedy(values, row[2])
         out = actions[trial]
         for i in range(out.shape[0]):
@@ -191,9 +237,10 @@ def act_kernel(observations, input_weights, action_weights, q, groups, shapes, k
 
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
-                 input_weights, action_weights, q, groups, shapes, k, alpha, lambda_s, lambda_a, n_s, n_a, offsets_s,
-                 offsets_a, neighbourhood_q, low, high, wrap, errors, grow_now):
-    """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring)."""
+                 input_weights, action_weights, q, slopes, linear, mid, span, groups, shapes, k, alpha, lambda_s,
+                 lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors, grow_now):
+    """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring;
+    with ``linear`` each moved unit's constant and slopes take the normalised step of its own answer)."""
     n_groups, width = groups.shape
     n_units = q.shape[1] // n_groups
     n_actions = q.shape[2]
@@ -206,6 +253,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     squared = np.empty(k + 1)
     next_units = np.empty((n_groups, k), dtype=np.int64)
     next_phi = np.empty((n_groups, k))
+    z = np.empty(observations.shape[1])
     step = alpha / n_groups
     wrapping = False
     for i in range(wrap.shape[0]):
@@ -217,7 +265,8 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
         if bootstrap[trial]:
             features(next_observations[trial], input_weights[trial], groups, shapes[trial], k, next_units, next_phi, part, order,
                      squared)
-            _summed(table, next_units, next_phi, values)
+            _summed_any(table, slopes[trial], linear, next_units, next_phi, next_observations[trial],
+                        input_weights[trial], groups, mid, span, z, values)
             top = values[0]
             for a in range(1, n_actions):
                 if values[a] > top:
@@ -231,8 +280,17 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                 parts[g, a] = 0.0
             for i in range(k):
                 if phi[trial, g, i] != 0.0:
+                    u = units[trial, g, i]
+                    if linear:
+                        deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
+                        for a in range(n_actions):
+                            total = table[u, a]
+                            for d in range(z.shape[0]):
+                                total += slopes[trial, u, a, d] * z[d]
+                            parts[g, a] += phi[trial, g, i] * total
+                        continue
                     for a in range(n_actions):
-                        parts[g, a] += phi[trial, g, i] * table[units[trial, g, i], a]
+                        parts[g, a] += phi[trial, g, i] * table[u, a]
             for a in range(n_actions):
                 values[a] += parts[g, a]
         neighbourhood_row(offsets_a, a_k, n_a, psi_a)
@@ -250,6 +308,11 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                 if weight == 0.0:
                     continue
                 centre = units[trial, g, i]
+                if linear:
+                    _move_linear(table, slopes[trial], observations[trial], input_weights[trial], groups[g], mid, span,
+                                 z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1], neighbourhood_q, n_s,
+                                 offsets_s, step * weight, psi_a, a_k, target, values, parts[g])
+                    continue
                 if not neighbourhood_q:
                     value = table[centre, a_k]
                     rest = values[a_k] - parts[g, a_k]
@@ -291,31 +354,69 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
 
 
 @numba.njit(cache=True, nogil=True)
-def _scratch(n_groups, width, k, n_actions):
-    """The per-call scratch of the greedy kernels: ``values``, ``part``, ``order``, ``squared``, ``units``, ``phi``."""
-    return (np.empty(n_actions), np.empty(width), np.empty(k + 1, dtype=np.int64), np.empty(k + 1),
-            np.empty((n_groups, k), dtype=np.int64), np.empty((n_groups, k)))
+def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q, n_s,
+                 offsets_s, rate, psi_a, a_k, target, values, parts):
+    """Step 8 for one of a map's k nearest units (``centre``, its weight folded into ``rate``) when units are
+    local linear: each unit m within reach moves its constant and slopes by ``rate psi_S(m) psi_A(a) e z /
+    (1 + |z|^2)``, ``e`` the error of its own answer at x (``target`` less the other maps' part less
+    ``q[m, a] + slopes[m, a] . z``), so that answer moves by the step a constant unit's value would."""
+    if not neighbourhood_q:
+        norm = 1.0 + deviation(x, weights[centre], group, mid, span, z)
+        answer = table[centre, a_k]
+        for d in range(z.shape[0]):
+            answer += slopes[centre, a_k, d] * z[d]
+        change = rate * (target - (values[a_k] - parts[a_k]) - answer) / norm
+        table[centre, a_k] += change
+        for d in range(z.shape[0]):
+            slopes[centre, a_k, d] += change * z[d]
+        return
+    r0 = (centre - first) // cols
+    c0 = (centre - first) - r0 * cols
+    reach = int(n_s + 1.0)
+    for r in range(max(0, r0 - reach), min(rows, r0 + reach + 1)):
+        for c in range(max(0, c0 - reach), min(cols, c0 + reach + 1)):
+            psi = max(0.0, 1.0 - offsets_s[abs(r - r0), abs(c - c0)] / (n_s + 1.0))
+            if psi > 0.0:
+                m = first + r * cols + c
+                norm = 1.0 + deviation(x, weights[m], group, mid, span, z)
+                for a in range(table.shape[1]):
+                    if psi_a[a] > 0.0:
+                        answer = table[m, a]
+                        for d in range(z.shape[0]):
+                            answer += slopes[m, a, d] * z[d]
+                        change = rate * psi * psi_a[a] * (target - (values[a] - parts[a]) - answer) / norm
+                        table[m, a] += change
+                        for d in range(z.shape[0]):
+                            slopes[m, a, d] += change * z[d]
 
 
 @numba.njit(cache=True, nogil=True)
-def _greedy_of(x, input_weights, q, groups, shapes, k, scratch):
+def _scratch(n_groups, width, k, n_actions, obs_dim):
+    """The per-call scratch of the greedy kernels: ``values``, ``part``, ``order``, ``squared``, ``units``, ``phi``, ``z``."""
+    return (np.empty(n_actions), np.empty(width), np.empty(k + 1, dtype=np.int64), np.empty(k + 1),
+            np.empty((n_groups, k), dtype=np.int64), np.empty((n_groups, k)), np.empty(obs_dim))
+
+
+@numba.njit(cache=True, nogil=True)
+def _greedy_of(x, input_weights, q, slopes, linear, mid, span, groups, shapes, k, scratch):
     """The greedy action unit of one observation (ties to the lowest index); leaves the summed Q in
     ``scratch[0]`` and each map's nearest units in ``scratch[4]``."""
-    values, part, order, squared, units, phi = scratch
+    values, part, order, squared, units, phi, z = scratch
     features(x, input_weights, groups, shapes, k, units, phi, part, order, squared)
-    _summed(q, units, phi, values)
+    _summed_any(q, slopes, linear, units, phi, x, input_weights, groups, mid, span, z, values)
     return _greedy(values, -1.0)
 
 
 @numba.njit(cache=True, nogil=True)
-def predict_kernel(observations, input_weights, action_weights, q, groups, shapes, k, interpolated, action_shape, low,
-                   high, wrap, out):
+def predict_kernel(observations, input_weights, action_weights, q, slopes, linear, mid, span, groups, shapes, k,
+                   interpolated, action_shape, low, high, wrap, out):
     """Greedy actions of ``observations (n_trials, n_obs, obs_dim)`` into ``out (n_trials, n_obs, action_dim)``:
     the best summed Q, ties to the lowest index, the parabola's shift with the interpolated response."""
-    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2])
+    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2], observations.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], groups, shapes[trial], k, scratch)
+            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial], linear, mid, span,
+                              groups, shapes[trial], k, scratch)
             action = out[trial, n]
             for i in range(action.shape[0]):
                 action[i] = action_weights[trial, unit, i]
@@ -327,12 +428,12 @@ def predict_kernel(observations, input_weights, action_weights, q, groups, shape
 
 
 @numba.njit(cache=True, nogil=True)
-def greedy_kernel(observations, input_weights, q, groups, shapes, k, units_out, first_out):
+def greedy_kernel(observations, input_weights, q, slopes, linear, mid, span, groups, shapes, k, units_out, first_out):
     """The greedy action unit (ties to the lowest index) and the first map's nearest unit of
     ``observations (n_trials, n_obs, obs_dim)``, into ``units_out``/``first_out`` ``(n_trials, n_obs)``."""
-    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2])
+    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2], observations.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            units_out[trial, n] = _greedy_of(observations[trial, n], input_weights[trial], q[trial], groups,
-                                             shapes[trial], k, scratch)
+            units_out[trial, n] = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial],
+                                             linear, mid, span, groups, shapes[trial], k, scratch)
             first_out[trial, n] = scratch[4][0, 0]

@@ -125,6 +125,13 @@ class SOMQConfig(ConfigBase):
     with 2x2 units (2 on a line) and gains a row or a column where its units' quantisation error is largest,
     up to ``input_shape`` units (0: every map has ``input_shape`` units from the start, the paper's)."""
 
+    local_linear: bool = False
+    """Each input unit answers with a local linear model, not one value per action unit: its Q of action
+    unit a at observation x is ``q[u, a] + slopes[u, a] . z``, ``z`` the observation's place round the unit
+    (in its map's dimensions, from the unit's weights; in every other observed dimension, from the box's
+    middle; each over its box's span), so one map's unit can hold how the value changes with every observed
+    dimension (``somarm.learners.groups``). Runs the grouped kernels; not with ``grow_every``."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -147,11 +154,17 @@ class SOMQConfig(ConfigBase):
         if isinstance(self.grow_every, bool) or not isinstance(self.grow_every, (int, np.integer)) or self.grow_every < 0:
             raise ValueError(f"grow_every must be a whole number >= 0 (0: no growth), got {self.grow_every!r}")
         object.__setattr__(self, "grow_every", int(self.grow_every))
+        if not isinstance(self.local_linear, (bool, np.bool_)):
+            raise ValueError(f"local_linear must be true or false, got {self.local_linear!r}")
+        object.__setattr__(self, "local_linear", bool(self.local_linear))
+        if self.local_linear and self.grow_every:
+            raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
+                             f"got grow_every={self.grow_every}")
 
     @property
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
-        return self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0
+        return self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
 
 
 def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray, span: float = 1.0) -> np.ndarray:
@@ -216,6 +229,8 @@ class SOMQLearner(MapLearner):
             table = grouping.group_table(grouping.parse_groups(config.input_groups, size))
             n_maps, width = table.shape
             n_floats += n_trials * (n_maps * n_s * (width + n_a + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
+            if config.local_linear:  # a slope per unit, action unit and observed dimension
+                n_floats += n_trials * n_maps * n_s * n_a * size
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -241,6 +256,11 @@ class SOMQLearner(MapLearner):
             start = [min(growing.START, size) for size in full] if cfg.grow_every else list(full)
             self._shapes = np.tile(np.array(start, dtype=np.int64), (self.n_trials, n_maps, 1))
             self._errors = np.zeros((self.n_trials, n_maps * n_s))
+            width = self.obs_dim if cfg.local_linear else 1
+            self.slopes = np.zeros((self.n_trials, n_maps * n_s if cfg.local_linear else 1, n_a if cfg.local_linear else 1,
+                                    width))
+            self._mid = (self.observation_low + self.observation_high) / 2.0
+            self._span = self.observation_high - self.observation_low
             # No one input map of (n_units, obs_dim) units to draw: figures and views of a map skip it.
             self.has_maps = False
         else:
@@ -248,6 +268,7 @@ class SOMQLearner(MapLearner):
             self._phi = np.zeros((self.n_trials, 1, 1))
             self._shapes = np.zeros((self.n_trials, 1, 2), dtype=np.int64)
             self._errors = np.zeros((self.n_trials, 1))
+            self.slopes = np.zeros((self.n_trials, 1, 1, 1))
         for trial, rng in enumerate(self._initial_generators()):
             # Table 1 order: input weights first, then action weights, from one child stream.
             if cfg.grouped:
@@ -288,13 +309,14 @@ class SOMQLearner(MapLearner):
         return self._wrap.copy()
 
     # ``_shapes`` and ``_errors``: each map's current grid and its units' summed errors (grouped maps only).
-    _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors")
+    # ``slopes``: each unit's local linear model (``local_linear`` only; a 1x1x1 placeholder otherwise).
+    _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors", "slopes")
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     # ``_group_units`` and ``_phi``: each map's k nearest units and their weights (grouped maps only).
     _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted", "_group_units", "_phi")
     # Files saved before these existed load with ``_shifted`` all False (nothing shifts: the winner
     # response) and the paper's one map (no groups).
-    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors")
+    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes")
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -318,8 +340,8 @@ class SOMQLearner(MapLearner):
         self._observations[...] = x
         if self.config.grouped:
             groups.act_kernel(
-                self._observations, self.input_weights, self.action_weights, self.q, self._groups,
-                self._shapes, self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
+                self._observations, self.input_weights, self.action_weights, self.q, self.slopes,
+                self.config.local_linear, self._mid, self._span, self._groups, self._shapes, self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
                 self.action_high, self._wrap, self.config.noise == "gaussian", self._interpolated,
                 self._action_grid_shape, self._group_units, self._phi, self._units, self._actions,
             )
@@ -362,7 +384,8 @@ class SOMQLearner(MapLearner):
         if self.config.grouped:
             groups.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
-                self._units, self._actions, self.input_weights, self.action_weights, self.q, self._groups,
+                self._units, self._actions, self.input_weights, self.action_weights, self.q, self.slopes,
+                self.config.local_linear, self._mid, self._span, self._groups,
                 self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
                 values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
                 self.action_high, self._wrap, self._errors,
@@ -411,7 +434,8 @@ class SOMQLearner(MapLearner):
             x = self._check_observations(observations, allow_many=True)
             many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
-            groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self._groups,
+            groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self.slopes,
+                                  self.config.local_linear, self._mid, self._span, self._groups,
                                   self._shapes, self.config.k_nearest, self._interpolated, self._action_grid_shape,
                                   self.action_low, self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
@@ -432,6 +456,6 @@ class SOMQLearner(MapLearner):
         many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
         units = np.empty(many.shape[:2], dtype=np.int64)
         first = np.empty(many.shape[:2], dtype=np.int64)
-        groups.greedy_kernel(many, self.input_weights, self.q, self._groups, self._shapes, self.config.k_nearest,
-                             units, first)
+        groups.greedy_kernel(many, self.input_weights, self.q, self.slopes, self.config.local_linear, self._mid,
+                             self._span, self._groups, self._shapes, self.config.k_nearest, units, first)
         return units.reshape(x.shape[:-1]), first.reshape(x.shape[:-1])

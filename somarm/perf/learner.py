@@ -43,10 +43,10 @@ CASES = (
 )
 
 
-#: The input representations (``input_groups``, ``k_nearest``, ``grow_every``) at Reacher-v5's size: 10
+#: The input representations (``input_groups``, ``k_nearest``, ``grow_every``, ``local_linear``) at Reacher-v5's size: 10
 #: observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
-_ONE_MAP = {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0}
-_PAIRS = {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0}
+_ONE_MAP = {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0, "local_linear": False}
+_PAIRS = {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0, "local_linear": False}
 REPRESENTATIONS = (
     ("one 20x20 map (the paper's)", _ONE_MAP),
     ("one 20x20 map, 3 nearest", {**_ONE_MAP, "k_nearest": 3}),
@@ -54,6 +54,9 @@ REPRESENTATIONS = (
     ("45 pair maps of 10x10, 3 nearest", {**_PAIRS, "k_nearest": 3}),
     ("45 pair maps growing to 10x10", {**_PAIRS, "grow_every": 1000}),
     ("5 maps of 10x10 (chunks:2)", {**_PAIRS, "input_groups": "chunks:2"}),
+    ("10 single maps of 20, 3 nearest, linear", {**_PAIRS, "input_groups": "singles", "input_shape": (20,),
+                                                 "k_nearest": 3, "local_linear": True}),
+    ("45 pair maps of 10x10, 3 nearest, linear", {**_PAIRS, "k_nearest": 3, "local_linear": True}),
 )
 
 

@@ -41,15 +41,19 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
 
 
 @pytest.mark.parametrize("changes", [{"input_groups": "pairs"}, {"k_nearest": 3},
-                                     {"input_groups": "0,2;1,3", "k_nearest": 2, "response": "interpolated"}])
+                                     {"input_groups": "0,2;1,3", "k_nearest": 2, "response": "interpolated"},
+                                     {"input_groups": "singles", "k_nearest": 2, "local_linear": True},
+                                     {"input_groups": "pairs", "local_linear": True, "neighbourhood_q": False}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
     alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
     _drive(batch, 80)
     _drive(alone, 80)
-    for name in ("input_weights", "action_weights", "q"):
+    for name in ("input_weights", "action_weights", "q", "slopes"):
         np.testing.assert_array_equal(getattr(batch, name)[2], getattr(alone, name)[0])
+    x = np.random.default_rng(1).random((1, 5, 4)) * [1.0, 2.0, 2.0, 4.0] - [0.0, 1.0, 0.0, 2.0]
+    np.testing.assert_array_equal(batch.predict(np.repeat(x, 3, axis=0))[2], alone.predict(x)[0])
 
 
 def test_groupings_name_the_dimensions_each_map_sees():
@@ -212,3 +216,48 @@ def test_grouped_maps_say_they_have_no_one_input_map_to_draw_and_a_run_folder_is
                                  overrides={"input_groups": "singles", "input_shape": (3, 3)}), progress=False)
     run.write(result, tmp_path / "run")  # with the figures
     assert (tmp_path / "run" / "learning_curve.png").exists()
+
+
+def _planted_unseen(local_linear, steps, seed):
+    """One map over observation 0 alone; action 0 is best at +0.5 where observation 1 (which no map sees) is
+    above its middle and at -0.5 below, a 2-unit grid. Returns the greedy policy's share of right torques."""
+    config = SOMQConfig(
+        input_shape=(3,), action_shape=(2,), action_init="grid", grid_span=0.5, alpha=Schedule(0.5),
+        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
+        p=Schedule(1.0, InverseDecay(500.0), 0.1), epsilon=Schedule(0.0), input_groups="0", local_linear=local_linear)
+    learner = SOMQLearner(config, n_trials=2, seed=seed, observation_low=[0.0, -1.0], observation_high=[1.0, 1.0],
+                          action_low=[-1.0], action_high=[1.0])
+    rng = np.random.default_rng(seed)
+    for _ in range(steps):
+        x = rng.random((2, 2)) * [1.0, 2.0] - [0.0, 1.0]
+        a = learner.act(x)
+        learner.learn(-np.abs(a[:, 0] - np.where(x[:, 1] > 0.0, 0.5, -0.5)))
+    x = rng.random((2, 500, 2)) * [1.0, 2.0] - [0.0, 1.0]
+    return float(np.mean(np.sign(learner.predict(x)[..., 0]) == np.where(x[..., 1] > 0.0, 1.0, -1.0)))
+
+
+def test_local_linear_units_answer_to_a_dimension_their_map_does_not_see():
+    # The best torque's sign follows observation 1; the map sees only observation 0. Constant units hold one
+    # torque per unit (about half right); local linear units' slopes along observation 1 turn the choice.
+    linear = _planted_unseen(True, 3000, 3)
+    constant = _planted_unseen(False, 3000, 3)
+    assert linear >= 0.9, linear
+    assert constant <= 0.7, constant
+
+
+def test_local_linear_answers_are_the_constant_plus_the_slopes_along_the_place_round_the_unit():
+    config = SOMQConfig(input_shape=(1,), action_shape=(2,), input_groups="0", local_linear=True, p=0.0,
+                        epsilon=0.0, action_init="grid")
+    learner = SOMQLearner(config, observation_low=[0.0, -1.0], observation_high=[1.0, 1.0], action_low=[-1.0],
+                          action_high=[1.0])
+    learner.input_weights[0, 0, 0] = 0.25
+    learner.q[0, 0] = [0.0, 0.1]
+    learner.slopes[0, 0, 1, 1] = 1.0  # action unit 1 gains along observation 1, over its span of 2
+    # At x = (0.75, -1): z = (0.5, -0.5): unit 1 answers 0.1 - 0.5 < 0 = unit 0; at x1 = 1 it answers 0.6.
+    np.testing.assert_array_equal(learner.predict([[0.75, -1.0]]), [[-1.0]])
+    np.testing.assert_array_equal(learner.predict([[0.75, 1.0]]), [[1.0]])
+
+
+def test_local_linear_is_refused_with_growing_maps_in_one_line():
+    with pytest.raises(ValueError, match="local_linear applies to maps of a fixed size"):
+        SOMQConfig(local_linear=True, grow_every=10)
