@@ -120,11 +120,24 @@ _EDGE_NOTE = ("Why trials fail: Table 1's actions are joint angles in the box [-
 
 
 def _edge_text(m: dict) -> str:
-    """Where the failed trials' action units are: piled at the -pi edge of the paper's box, or not."""
+    """Where the failed trials' action units are: piled at the -pi edge of the paper's box, or not (a
+    sentence that reads at any count: no failed trial, one, several, all)."""
     others = m["edge"][~m["failed mask"]]
-    return (f"{m['failed at the edge']} of the {m['failed']} failed trials have {fmt(100 * _PILED, 3)}% or more "
-            f"of their action units within {metrics.EDGE_WIDTH} rad of -pi, the edge of the paper's box (the "
-            f"other trials at most {fmt(100 * others.max(), 3)}%).")
+    piled, failed = m["failed at the edge"], m["failed"]
+    where = (f"{fmt(100 * _PILED, 3)}% or more of {{}} action units within {metrics.EDGE_WIDTH} rad of -pi, the edge "
+             "of the paper's box")
+    if failed == 0:
+        return (f"No trial failed; none has {where.format('its')} (at most {fmt(100 * others.max(), 3)}% of a "
+                "trial's units are there).")
+    if failed == 1:
+        text = f"The failed trial {'has' if piled else 'does not have'} {where.format('its')}"
+    else:
+        counted = "All" if piled == failed else "None" if piled == 0 else f"{piled}"
+        verb = "has" if counted == "None" or piled == 1 else "have"
+        text = f"{counted} of the {failed} failed trials {verb} {where.format('their')}"
+    if not others.size:
+        return f"{text}."
+    return f"{text} (the other trials at most {fmt(100 * others.max(), 3)}%)."
 
 
 def _claims(m: dict, greedy: np.ndarray) -> list[Claim]:

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Claim", "Section", "merge_seeds", "render", "claim_record", "TITLE", "BENCHMARKS_TITLE", "SUITE_TITLE"]
+__all__ = ["Claim", "Section", "merge_seeds", "render", "alt_text", "png_title", "claim_record", "TITLE",
+           "BENCHMARKS_TITLE", "SUITE_TITLE"]
 
 
 @dataclass
@@ -186,5 +187,42 @@ def render(sections: list[Section], *, header: list[str], out_dir: Path, seeds: 
             # Relative to REPORT.md's own folder, so that the links hold wherever the folder is read
             # from, and after a forced run's files move from the staging folder into ``out``.
             rel = Path(fig).absolute().relative_to(Path(out_dir).absolute())
-            lines += ["", f"![{rel.stem}]({rel.as_posix()})"]
+            lines += ["", f"![{alt_text(Path(fig), section.title)}]({rel.as_posix()})"]
     return "\n".join(lines) + "\n"
+
+
+def alt_text(figure: Path, section_title: str) -> str:
+    """What a figure shows, for its image link: the title the PNG carries (``plots.save`` writes the
+    figure's title into it), else the part's title with the figure's name; one line, no brackets."""
+    title = png_title(figure)
+    text = title if title else f"{section_title}, figure {figure.stem}"
+    return " ".join(text.replace("[", "(").replace("]", ")").split())
+
+
+def png_title(path: Path) -> str | None:
+    """The ``Title`` text chunk of a PNG file (``tEXt`` or ``iTXt``, before the image data), or None
+    where it has none or cannot be read."""
+    import struct
+    import zlib
+
+    try:
+        with open(path, "rb") as file:
+            if file.read(8) != b"\x89PNG\r\n\x1a\n":
+                return None
+            while header := file.read(8):
+                length, kind = struct.unpack(">I4s", header)
+                if kind == b"IDAT" or length > 1 << 20:  # the text chunks a title would be in come first
+                    return None
+                data = file.read(length)
+                file.read(4)  # the chunk's CRC
+                keyword, _, rest = data.partition(b"\0")
+                if keyword != b"Title":
+                    continue
+                if kind == b"tEXt":
+                    return rest.decode("latin-1")
+                if kind == b"iTXt":  # compression flag and method, language, translated keyword, text
+                    compressed, text = rest[0], rest[2:].split(b"\0", 2)[-1]
+                    return (zlib.decompress(text) if compressed else text).decode("utf-8")
+    except (OSError, ValueError, IndexError, struct.error, zlib.error):
+        return None
+    return None

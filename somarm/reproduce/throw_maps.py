@@ -10,7 +10,7 @@ from somarm import plots
 from somarm.reproduce import metrics
 from somarm.reproduce.common import Context, counted, final_error, fmt, preset_choices, run_group
 from somarm.reproduce.experiment import Experiment
-from somarm.reproduce.figures import save, throw_action_map, unit_square
+from somarm.reproduce.figures import legend_below, save, throw_action_map, unit_square
 from somarm.reproduce.report import Claim, Section
 from somarm.reproduce.throw import landing, solution_curve
 from somarm.run import RunConfig, RunResult
@@ -114,15 +114,22 @@ def _claims(measured: dict[int, dict]) -> list[Claim]:
 
 def _trial_row(axes, learner, i: int, targets: np.ndarray, landed: np.ndarray, miss: float) -> None:
     """One trial's input map, action map over the X = 4.5 curve, and greedy landing against target."""
+    from matplotlib.lines import Line2D
+
     greedy = learner.q[i].argmax(axis=1)
     n_actions = learner.q.shape[2]
     plots.draw_input_map(axes[0], learner.input_weights[i] / 9.0, greedy, n_actions,
                          tuple(learner.config.input_shape), labels=("target (normalised)",))
     axes[0].set_title(f"trial {i}: input map (shaded by greedy action unit)", fontsize=9)
     throw_action_map(axes[1], solution_curve(X=4.5), learner.action_weights[i],
-                     curve_style={"color": "0.85", "lw": 4, "label": "lands at 4.5"}, labels=("u_x", "u_y"))
+                     curve_style={"color": "0.85", "lw": 4, "label": "throws landing at 4.5"}, labels=("u_x", "u_y"))
     unit_square(axes[1])
     axes[1].set_title("action map (shaded by index)", fontsize=9)
+    # The map's own lines carry no label (plots.draw_action_map): named here by stand-ins of their style.
+    chain = Line2D([], [], color="0.6", lw=0.7, label="neighbouring action units")
+    unit = Line2D([], [], ls="none", marker="o", markerfacecolor="0.7", markeredgecolor="k", label="action unit")
+    axes[1].legend(handles=[*axes[1].get_legend_handles_labels()[0], chain, unit], fontsize=7,
+                   **{**legend_below(ncol=3), "bbox_to_anchor": (0.5, -0.2)})  # below the u_x label
     index = np.arange(len(targets))
     axes[2].plot(index, targets, "k--", lw=0.8, label="target of the unit")
     axes[2].scatter(index, landed, c=plots.unit_colours(n_actions)[greedy], edgecolors="k", linewidths=0.4,

@@ -106,3 +106,61 @@ def _legend_overlaps(fig) -> tuple[int, list[str]]:
     overlaps = [f"{legend.get_texts()[0].get_text()!r} over {ax.get_title()!r}" for legend in legends
                 for ax in fig.axes if legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))]
     return len(legends), overlaps
+
+
+@pytest.mark.parametrize("failed", [[], [0], [0, 2], [0, 1, 2, 3]])
+def test_the_edge_sentence_of_fig_8_reads_at_any_count_of_failed_trials(failed):
+    import numpy as np
+
+    from somarm.reproduce.reach2 import _edge_text
+
+    mask = np.zeros(4, bool)
+    mask[failed] = True
+    edge = np.where(mask, 0.95, 0.1)
+    edge[failed[:1]] = 0.5  # the first failed trial is not piled at the edge
+    text = _edge_text({"failed": int(mask.sum()), "failed mask": mask, "edge": edge,
+                       "failed at the edge": int((mask & (edge >= 0.9)).sum())})
+    assert not re.search(r"\b(\d+) of the \1\b", text) and "0 of the" not in text, text
+
+
+def test_every_labelled_line_of_figs_21_to_23_is_in_a_legend(tmp_path, monkeypatch):
+    from somarm.reproduce import throw_maps
+
+    drawn = []
+    original = throw_maps.save
+
+    def keep(ctx, fig, name, **kwargs):
+        fig.canvas.draw()
+        drawn.append((name, [(ax.get_title(), {line.get_label() for line in ax.get_lines()
+                                               if not line.get_label().startswith("_")},
+                              {text.get_text() for text in ax.get_legend().get_texts()} if ax.get_legend() else set())
+                             for ax in fig.axes]))
+        return original(ctx, fig, name, **kwargs)
+
+    monkeypatch.setattr(throw_maps, "save", keep)
+    assert runner.reproduce(tmp_path, quick=True, only=["throw_maps"], progress=False) == 0
+    assert [name for name, _ in drawn][:1] == ["fig21_throw_maps_na25.png"]
+    for name, axes in drawn:
+        for title, labelled, legend in axes:
+            assert labelled <= legend, (name, title, labelled - legend)
+
+
+@pytest.mark.parametrize("title", ["Fig. 21: throw_distance, action neighbourhood N_A = 25", "reach2 → goals [0, 1]",
+                                   None])
+def test_a_figures_alt_text_says_what_it_shows_not_its_file_name(tmp_path, title):
+    from somarm import plots
+    from somarm.reproduce.report import Section, render
+
+    plt = plots.pyplot()
+    fig = plt.figure(figsize=(1, 1))
+    path = tmp_path / "figures" / "fig21_throw_maps_na25.png"
+    path.parent.mkdir()
+    fig.savefig(path, metadata={"Title": title} if title else {})
+    plt.close(fig)
+    section = Section("throw_maps", "Figs. 21-23: varied target distance", [path], [])
+    (alt,) = re.findall(r"!\[([^\]]*)\]\(figures/fig21_throw_maps_na25\.png\)", render([section], header=[], out_dir=tmp_path))
+    assert alt != "fig21_throw_maps_na25" and "\n" not in alt
+    if title:
+        assert alt == title.replace("[", "(").replace("]", ")")
+    else:
+        assert alt.startswith("Figs. 21-23: varied target distance")
