@@ -153,3 +153,50 @@ def test_every_install_line_that_pulls_torch_installs_its_cpu_build_first():
                 if with_torch & set(wanted.split(",")):
                     around = line + (lines[i - 1] if i else "")
                     assert "download.pytorch.org/whl/cpu" in around, f"{page.name}:{i + 1}: {line}"
+
+
+def _budget_rows(path: Path) -> dict[str, list[str]]:
+    """The rows of a page's budget table (its header names "SOM-Q's preset trains"), by environment."""
+    text = path.read_text()
+    table = text[text.index("| environment | SOM-Q's preset trains"):].split("\n\n")[0].splitlines()[2:]
+    return {cells[0]: cells[1:] for cells in ([c.strip() for c in row.strip("|").split("|")] for row in table)}
+
+
+@pytest.mark.parametrize("page", [README, ROOT / "docs" / "results.md"], ids=lambda p: p.name)
+def test_the_budget_tables_samples_and_seconds_are_the_presets_and_the_reports(page):
+    from somarm.tasks.gym_envs import BENCHMARKS
+
+    folders = {"Pendulum-v1": "pendulum", "MountainCarContinuous-v0": "mountaincar",
+               "InvertedPendulum-v5": "invertedpendulum", "Reacher-v5": "reacher"}
+    rows = _budget_rows(page)
+    assert set(folders) <= set(rows)
+    for env_id, folder in folders.items():
+        trains, seconds, ends, target = rows[env_id][:4]
+        report = (ROOT / "docs" / "benchmarks" / folder / "REPORT.md").read_text()
+        final, to_target, ms = re.search(rf"^\| {env_id} \| SOM-Q \| (\S+) ± \S+ \| [^|]+ \| ([^|]+) \| (\S+) \|$",
+                                         report, re.M).groups()
+        steps = BENCHMARKS[env_id][1]
+        assert trains == f"{steps:,} samples", (env_id, trains)
+        assert seconds == f"about {round(steps * float(ms) / 1000)}", (env_id, seconds, ms)
+        assert ends == final, (env_id, ends, final)
+        if to_target.strip() == "not reached":
+            assert target.endswith("not reached"), (env_id, target)
+        else:
+            samples, wall = re.fullmatch(r"(\d+) samples, ([\d.]+) s", to_target.strip()).groups()
+            assert target.endswith(f"after {int(samples):,} samples, {round(float(wall))} s"), (env_id, target)
+
+
+def test_every_command_the_readme_gives_runs_from_the_venv():
+    text = README.read_text()
+    commands = [part.strip() for block in re.findall(r"^```bash\n(.*?)^```", text, re.S | re.M)
+                for line in block.splitlines() for part in line.split("&&") if part.strip()]
+    commands += re.findall(r"`((?:pip|mkdocs|pytest|ruff|somarm) [^`]*)`", text)  # inline, as typed
+    allowed = (".venv/bin/", "python3 -m venv ")
+    assert commands and all(c.startswith(allowed) for c in commands if not c.startswith("somarm ")), commands
+
+
+def test_no_image_on_the_pages_is_described_by_its_file_name():
+    for page in PAGES:
+        for alt, target in re.findall(r"!\[([^\]]*)\]\(([^)\s]+)\)", page.read_text()):
+            stem = Path(target).stem
+            assert alt.strip() and alt != stem and len(alt.split()) >= 3, (page.name, alt, target)

@@ -24,7 +24,7 @@ def _setup_and_rows() -> tuple[str, list[tuple[str, str]]]:
 def test_the_page_has_a_line_for_each_of_sb3s_verbs():
     code = " ".join(line for _, line in _setup_and_rows()[1])
     for verb in ("learn(", "callback=", "progress_bar=", "reset_num_timesteps=", "predict(", "episode_start=",
-                 "evaluate_policy(", "save(", "SOMQ.load(", "get_env(", "set_env(", "Monitor("):
+                 "evaluate_policy(", "save(", "SOMQ.load(", "get_env(", "set_env(", "Monitor(", "MlpPolicy", "verbose="):
         assert verb in code, verb
 
 
@@ -43,3 +43,4 @@ def test_every_line_of_the_table_runs_as_the_page_says(tmp_path, monkeypatch):
         except Exception as exc:
             raise AssertionError(f"the line for {what!r} fails: {line}") from exc
     assert (tmp_path / "runs" / "pendulum" / "learner.npz").is_file()
+    assert (tmp_path / "pendulum.zip").is_file()  # SB3's one file beside the run folder
