@@ -1,10 +1,13 @@
 """Gymnasium environments as batched tasks: any registered id with ``Box`` spaces, named ``gym:ID``.
 
 ``tasks.make("gym:Pendulum-v1", n_trials=N, seed=s)`` holds N independent copies of the
-environment, stepped in lockstep with a batched learner, as every multi-step task
-(``somarm.protocols.EpisodicTask``): after ``step``, ``next_observations``, ``terminal`` and
-``truncated`` say what happened in each trial, and ``reset()`` starts a new episode only in the
-trials whose episode is over. Gymnasium's two endings stay apart: ``terminated`` (a state the
+environment in Gymnasium's ``SyncVectorEnv``, stepped in lockstep with a batched learner, as every
+multi-step task (``somarm.protocols.EpisodicTask``): after ``step``, ``next_observations``,
+``terminal`` and ``truncated`` say what happened in each trial, and ``reset()`` starts a new episode
+only in the trials whose episode is over. The vector env's autoreset is off (``AutoresetMode.DISABLED``):
+``reset()`` resets the trials that are over (``reset_mask``), each with its own seed. Gymnasium's
+other modes reset without a seed (``SAME_STEP``, so a trial's episodes would not come from its own
+stream) or spend a step on the reset (``NEXT_STEP``, a step the learner would count). Gymnasium's two endings stay apart: ``terminated`` (a state the
 future does not follow, such as a fallen pole) is ``terminal``, so the learner does not bootstrap
 through it; ``truncated`` (a time limit) is not, so it does, from the true last observation.
 
@@ -461,6 +464,14 @@ def estimate_bounds(params: GymParams, seed: int, *, env: Any = None,
     return _told(low, high, ranges, widened)
 
 
+def _vector(envs: list[Any]):
+    """``envs`` as one ``SyncVectorEnv`` whose autoreset is off (``GymTask.reset`` resets, with seeds)."""
+    from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+    return SyncVectorEnv([functools.partial(lambda env: env, env) for env in envs], copy=False,
+                         autoreset_mode=AutoresetMode.DISABLED)
+
+
 class GymTask(TaskBase):
     """N copies of a Gymnasium environment as a batched multi-step task (``EpisodicTask``).
 
@@ -501,8 +512,8 @@ class GymTask(TaskBase):
         self.evaluation_steps = params.evaluation_steps
         self._generators = trial_generators(seed, self.trial_ids, "task")
         self._given = env
-        self._envs = [params.make_env() for _ in range(self.n_trials)] if env is None else \
-            [env, *(copy_of(env) for _ in range(self.n_trials - 1))]
+        self._vector = _vector([params.make_env() for _ in range(self.n_trials)] if env is None else
+                               [env, *(copy_of(env) for _ in range(self.n_trials - 1))])
         self._eval_envs: list[Any] = []
         self._current = np.zeros((self.n_trials, self.scale_low.size))
         self._over = np.ones(self.n_trials, dtype=bool)
@@ -531,13 +542,14 @@ class GymTask(TaskBase):
 
     def env_of(self, trial: int):
         """The environment object trial ``trial`` steps."""
-        return self._envs[trial]
+        return self._vector.envs[trial]
 
     def close(self) -> None:
         """Close every copy of the environment (a given environment stays open: it is its owner's)."""
-        for env in self._envs + self._eval_envs:
+        for env in [*self._vector.envs, *self._eval_envs]:
             if env is not self._given:
                 env.close()
+        self._vector.closed = True  # its own close would close the given environment too
 
     # -- the boundary with Gymnasium -------------------------------------------------------
     def scale(self, observations: Any) -> np.ndarray:
@@ -549,16 +561,19 @@ class GymTask(TaskBase):
         return self.scaling.unscale(observations)
 
     def env_action(self, env, action: np.ndarray) -> np.ndarray:
-        """A float64 action inside the Box as the environment's dtype, kept inside its Box after rounding."""
-        space = env.action_space
+        """Float64 actions inside the Box as the environment's dtype, kept inside its Box after rounding
+        (one action, or a batch of them for the vector env)."""
+        space = getattr(env, "single_action_space", env.action_space)
         return np.clip(action.astype(space.dtype), space.low, space.high)
 
     # -- the BatchedTask protocol ----------------------------------------------------------
     def reset(self) -> np.ndarray:
         """Start new episodes in the trials whose episode is over; every trial's scaled observation."""
-        for i in np.flatnonzero(self._over):
-            observation, _ = self._envs[i].reset(seed=int(self._generators[i].integers(2**31)))
-            self._current[i] = self.scale(observation)
+        over = self._over.copy()
+        if over.any():
+            seeds = [int(g.integers(2**31)) if over[i] else None for i, g in enumerate(self._generators)]
+            observations, _ = self._vector.reset(seed=seeds, options={"reset_mask": over})
+            self._current[over] = self.scale(observations[over])
         self._over[:] = False
         self._started = True
         return self._current.copy()
@@ -572,12 +587,9 @@ class GymTask(TaskBase):
         if not self._started:
             raise ValueError(f"{self.name}: call reset() before step()")
         actions = self.batch_actions(actions)
-        rewards = np.empty(self.n_trials)
-        for i, env in enumerate(self._envs):
-            observation, reward, terminated, truncated, _ = env.step(self.env_action(env, actions[i]))
-            rewards[i] = reward
-            self.next_observations[i] = self.scale(observation)
-            self.terminal[i], self.truncated[i] = terminated, truncated and not terminated
+        observations, rewards, terminated, truncated, _ = self._vector.step(self.env_action(self._vector, actions))
+        self.next_observations[:] = self.scale(observations)
+        self.terminal[:], self.truncated[:] = terminated, truncated & ~terminated
         self._current[:] = self.next_observations
         self._over = self.terminal | self.truncated
         self._started = False

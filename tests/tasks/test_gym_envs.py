@@ -72,6 +72,26 @@ class _Drifting(gymnasium.Env):
 gymnasium.register("somarmtest/HugeBox-v0", entry_point=_Drifting, max_episode_steps=20)
 
 
+class _Ragged(gymnasium.Env):
+    """Episodes of 1 to 5 steps, their length drawn at reset from the reset's seed; the observation is
+    (steps taken, the length), so a step shows whether its episode went on or started again."""
+
+    observation_space = spaces.Box(0.0, 10.0, (2,), np.float64)
+    action_space = spaces.Box(-1.0, 1.0, (1,), np.float64)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.steps, self.length = 0, int(self.np_random.integers(1, 6))
+        return np.array([0.0, self.length]), {}
+
+    def step(self, action):
+        self.steps += 1
+        return np.array([self.steps, self.length], dtype=np.float64), 1.0, self.steps >= self.length, False, {}
+
+
+gymnasium.register("somarmtest/Ragged-v0", entry_point=_Ragged, max_episode_steps=100)
+
+
 def _one_unit(gamma):
     """SOM-Q with one input and one action unit: its single Q value is the discounted return."""
     return SOMQConfig(input_shape=(1,), action_shape=(1,), alpha=Schedule(0.05), lambda_s=Schedule(0.0),
@@ -136,7 +156,7 @@ def test_task_set_passes_keywords_to_gymnasium_make():
         task.reset()
     light.step(np.zeros((1, 1)))
     heavy.step(np.zeros((1, 1)))
-    assert light._envs[0].unwrapped.g == 2.0 and heavy._envs[0].unwrapped.g == 15.0
+    assert light.env_of(0).unwrapped.g == 2.0 and heavy.env_of(0).unwrapped.g == 15.0
     assert not np.allclose(light.next_observations, heavy.next_observations)
 
 
@@ -174,6 +194,24 @@ def test_episodes_reset_from_each_trials_own_stream_alone_or_batched():
         assert rewards[2] == reward[0]
         np.testing.assert_array_equal(batch.next_observations[2], alone.next_observations[0])
         assert batch.truncated[2] == alone.truncated[0] and not batch.terminal.any()
+
+
+def test_ragged_episode_ends_reset_only_the_trials_that_ended_each_from_its_own_seed():
+    batch = tasks.make("gym:somarmtest/Ragged-v0", n_trials=4, seed=3)
+    alone = [tasks.make("gym:somarmtest/Ragged-v0", seed=3, trial_ids=[i]) for i in range(4)]
+    counted, ended, lengths = np.zeros(4), np.ones(4, dtype=bool), set()
+    for _ in range(40):
+        started = batch.unscale(batch.reset())
+        # the trials that ended start again (step 0); the others go on from where they were
+        np.testing.assert_array_equal(started[:, 0], np.where(ended, 0.0, counted))
+        batch.step(np.zeros((4, 1)))
+        counted, ended = batch.unscale(batch.next_observations)[:, 0], batch.terminal.copy()
+        lengths.update(batch.unscale(batch.next_observations)[ended, 1].tolist())
+        for i, task in enumerate(alone):  # each trial's episodes are its own, alone or in the batch
+            np.testing.assert_array_equal(task.unscale(task.reset())[0], started[i])
+            task.step(np.zeros((1, 1)))
+            assert task.terminal[0] == ended[i]
+    assert len(lengths) >= 3  # episodes of several lengths ended, at different steps in different trials
 
 
 def test_training_is_repeatable_and_a_trial_alone_equals_it_in_a_batch():
