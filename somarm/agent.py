@@ -3,17 +3,21 @@
 A thin layer over the run machinery (``somarm.run``): the environment is a task (``gym:ID`` for a
 Gymnasium id, or one of this project's tasks), the learner is built from a preset as ``somarm
 train`` builds it, ``learn`` runs the training loop, ``save`` writes a run folder that ``somarm
-evaluate`` and ``somarm view`` read, and ``load`` reads one back::
+evaluate`` and ``somarm view`` read (or, given ``NAME.zip``, one zip file, as SB3 saves), and
+``load`` reads either back::
 
     from somarm import SOMQ
 
-    model = SOMQ("Pendulum-v1", seed=0)
-    model.learn(total_timesteps=20_000)
+    model = SOMQ("MlpPolicy", "Pendulum-v1", seed=0)   # or SOMQ("Pendulum-v1", seed=0)
+    model.learn(total_timesteps=200_000)
     action, _ = model.predict(observation, deterministic=True)
-    model.save("runs/pendulum")
-    model = SOMQ.load("runs/pendulum")
+    model.save("pendulum.zip")
+    model = SOMQ.load("pendulum.zip")
 
 Where it differs from SB3, and why:
+
+- The policy is SOM-Q's maps: ``"MlpPolicy"`` is taken as SB3 code passes it and ignored, and other
+  policies are refused (``SOMQ``'s docstring says why).
 
 - ``n_trials`` independent learners train side by side (default 1), each on its own copy of the
   environment; ``total_timesteps`` counts the steps of each, and ``predict`` answers for ``trial``.

@@ -465,3 +465,10 @@ def test_compare_plans_the_comparison_once(tmp_path, monkeypatch):
     assert main(["compare", "reach2", "--learners", "somq", "--samples", "100", "--seeds", "1", "--no-progress",
                  "--out", str(tmp_path / "c")]) == 0
     assert len(made) == 1
+
+
+def test_python_dash_m_somarm_is_the_somarm_command():
+    import somarm
+
+    done = subprocess.run([sys.executable, "-m", "somarm", "--version"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.strip() == f"somarm {somarm.__version__}", done.stderr
