@@ -50,9 +50,19 @@ def save(fig: plt.Figure, path: str | Path, *, crop: bool = True) -> Path:
       ValueError: the file cannot be written (a full disk), in one line naming it.
     """
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight" if crop else None)
+    title = _title_of(fig)
+    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight" if crop else None,
+                metadata={"Title": title} if title else None)
     plt.close(fig)
     return atomic_write_bytes(path, buffer.getvalue())
+
+
+def _title_of(fig: plt.Figure) -> str:
+    """The figure's title (its suptitle, else its first axes' title), written into the PNG so that a
+    report's image link can describe the figure; "" when it has none."""
+    if fig._suptitle is not None and fig._suptitle.get_text():
+        return fig._suptitle.get_text()
+    return next((ax.get_title() for ax in fig.axes if ax.get_title()), "")
 
 
 def forward_filled(values: np.ndarray) -> np.ndarray:

@@ -30,3 +30,19 @@ def test_the_input_map_has_a_colour_bar_that_matches_its_units(tmp_path, monkeyp
         np.testing.assert_allclose(points.get_facecolors(), bar.mappable.to_rgba(indices), atol=1e-6)
     finally:
         plots.plt.close("all")
+
+
+@pytest.mark.parametrize("titled", ["suptitle", "axes", "none"])
+def test_a_saved_png_carries_the_figures_title(tmp_path, titled):
+    from PIL import Image
+
+    fig, ax = plots.plt.subplots()
+    ax.plot([0, 1], [1, 0])
+    if titled == "suptitle":
+        fig.suptitle("the whole figure")
+        ax.set_title("one panel")
+    elif titled == "axes":
+        ax.set_title("one panel")
+    path = plots.save(fig, tmp_path / "f.png")
+    said = Image.open(path).text.get("Title")
+    assert said == {"suptitle": "the whole figure", "axes": "one panel", "none": None}[titled]

@@ -12,12 +12,11 @@ The overhead is the adapter's time minus the bare task's. Each figure is the bes
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
+from somarm.helptext import PlainHelpFormatter
 from somarm.perf import best_seconds
-from somarm.validation import whole_number
+from somarm.validation import OneLineParser, whole_number
 
 __all__ = ["measure", "main"]
 
@@ -76,8 +75,8 @@ def measure(task: str, *, n_envs: int, steps: int, repeats: int) -> dict[str, fl
 
 def main(argv: list[str] | None = None) -> int:
     """Print the figures; ``--quick`` for a smoke run."""
-    parser = argparse.ArgumentParser(prog="somarm bench adapters", description=__doc__.splitlines()[0],
-                                     allow_abbrev=False)
+    parser = OneLineParser(prog="somarm bench adapters", description=__doc__.splitlines()[0],
+                           formatter_class=PlainHelpFormatter)
     parser.add_argument("--task", default="reach2", help="task (default reach2)")
     parser.add_argument("--envs", type=whole_number, default=100, help="envs (trials) stepped together (default 100)")
     parser.add_argument("--steps", type=whole_number, help="steps per timing (default 300, quick 30)")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 
+from somarm.helptext import PlainHelpFormatter
 from somarm.run import RunConfig, RunGroup
 from somarm.validation import OneLineParser, check_int, whole_number
 
@@ -36,7 +37,7 @@ def step_ms(label: str, *, n_steps: int) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table; returns 0 (a benchmark reports, it does not fail)."""
-    parser = OneLineParser(prog="somarm bench loop", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="somarm bench loop", description=__doc__.splitlines()[0], formatter_class=PlainHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="short runs, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=whole_number, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--steps", type=whole_number, default=2000, help="steps per timed run (2000)")

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from somarm import tasks
+from somarm.helptext import PlainHelpFormatter
 from somarm.io import atomic_write_json
 from somarm.perf.rollouts import RolloutClock
 from somarm.tasks import flight
@@ -128,7 +129,7 @@ def _step_ms(name: str, n_trials: int, steps: int, rng: np.random.Generator, rep
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table (and write ``--json``); returns 0 (a benchmark reports, it does not fail)."""
-    parser = OneLineParser(prog="somarm bench tasks", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="somarm bench tasks", description=__doc__.splitlines()[0], formatter_class=PlainHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="small batches, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=whole_number, default=3, help="timed runs per figure, best kept (3)")
     parser.add_argument("--only", nargs="+", metavar="TASK",

@@ -20,6 +20,7 @@ import timeit
 
 import numpy as np
 
+from somarm.helptext import PlainHelpFormatter
 from somarm.validation import OneLineParser, check_int, check_number, number, whole_number
 
 __all__ = ["main"]
@@ -48,7 +49,7 @@ def _throttled_update_ns(view) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; returns 0."""
-    parser = OneLineParser(prog="somarm bench viewer", description=__doc__.split("\n")[0])
+    parser = OneLineParser(prog="somarm bench viewer", description=__doc__.split("\n")[0], formatter_class=PlainHelpFormatter)
     parser.add_argument("--task", default="reach2")
     parser.add_argument("--steps", type=whole_number, default=20_000)
     parser.add_argument("--trials", type=whole_number, default=1)
