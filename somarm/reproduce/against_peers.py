@@ -6,15 +6,18 @@ far longer than the paper's experiments); ``somarm reproduce --only peers`` runs
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from somarm.learners.tabular import MAX_TABLE_ENTRIES, TabularConfig
 from somarm.peers import compare
 from somarm.peers.plot import NAMES
 from somarm.reproduce.common import Context, fmt
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 
-__all__ = ["TASKS", "train", "measure", "peers", "table"]
+__all__ = ["TASKS", "Trained", "train", "measure", "report", "peers", "table"]
 
 #: The tasks of the part and the learners run on each (a fixed grid cannot take reach20's 20 angles).
 TASKS: dict[str, tuple[str, ...]] = {
@@ -68,28 +71,32 @@ def _final(result: dict, kind: str) -> float:
     return float(np.median(result["learners"][kind]["error"][-1]))
 
 
-def train(ctx: Context, budgets: dict[str, int], seeds: int, peer_samples: int) -> dict[str, dict]:
+@dataclass(frozen=True)
+class Trained:
+    """Every comparison's answer, and the budgets they ran at."""
+
+    results: dict[str, dict]  #: ``compare.compare``'s answer, by task
+    budgets: dict[str, int]  #: somarm's learners' samples, by task
+    seeds: int  #: seeds per learner
+    peer_samples: int  #: TD3's and SAC's samples
+
+
+def train(ctx: Context) -> Trained:
     """Every learner of ``TASKS`` on each task through ``somarm.peers.compare`` (which writes
-    ``peers/<task>/compare.json`` and ``compare.png``); its answer per task.
-
-    Args:
-      ctx: where and how the experiment runs (its seed, quick mode and backend).
-      budgets: somarm's learners' samples, by task.
-      seeds: seeds per learner.
-      peer_samples: TD3's and SAC's samples.
-
-    Returns:
-      ``compare.compare``'s answer, by task.
+    ``peers/<task>/compare.json`` and ``compare.png``): somarm's learners for the task's run length, TD3
+    and SAC for 10,000 samples, 2 seeds each (``ctx.quick``: 200 and 120 samples, 1 seed).
 
     Raises:
       KeyboardInterrupt: a comparison was stopped (what finished is written).
     """
+    seeds, peer_samples = ctx.pick(2, 1), ctx.pick(10_000, 120)
+    budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
     results = {}
     for task, learners in TASKS.items():
         config = compare.CompareConfig(task=task, learners=learners, samples=budgets[task],
                                        peer_samples=peer_samples, seeds=seeds, eval_seed=ctx.seed)
         results[task] = compare.compare(config, ctx.out_dir / "peers" / task, progress=ctx.progress)
-    return results
+    return Trained(results, budgets, seeds, peer_samples)
 
 
 def measure(results: dict[str, dict]) -> dict:
@@ -147,23 +154,10 @@ def _notes(results: dict[str, dict], m: dict, seeds: int) -> list[str]:
     return notes
 
 
-def peers(ctx: Context) -> Section:
+def report(ctx: Context, trained: Trained) -> Section:
     """Every learner on reach2, reach20 and throw_distance: error against samples and wall time, and the
-    time each takes to reach a greedy error of 0.05, 0.02 and 0.01.
-
-    Args:
-      ctx: where and how the experiment runs (``ctx.quick``: reduced trial counts and run lengths).
-
-    Returns:
-      The report's section: claims with their verdicts, notes, this project's choices, the figures.
-
-    Raises:
-      KeyboardInterrupt: the training was stopped (Ctrl-C during ``somarm.peers.compare``).
-      ValueError: a figure cannot be written (a full disk), in one line naming it.
-    """
-    seeds, peer_samples = ctx.pick(2, 1), ctx.pick(10_000, 120)
-    budgets = {task: ctx.pick(compare.task_defaults(task)[1], 200) for task in TASKS}
-    results = train(ctx, budgets, seeds, peer_samples)
+    time each takes to reach a greedy error of 0.05, 0.02 and 0.01."""
+    results, budgets, seeds, peer_samples = trained.results, trained.budgets, trained.seeds, trained.peer_samples
     m = measure(results)
     section = Section("peers", "Peers: SOM-Q beside a fixed action grid, TD3 and SAC (Stable-Baselines3)")
     section.figures += [ctx.out_dir / "peers" / task / "compare.png" for task in TASKS]
@@ -184,3 +178,8 @@ def peers(ctx: Context) -> Section:
         "Error is minus the mean reward on the same fresh observations for every learner (the evaluation stream).",
     ]
     return section
+
+
+#: The comparison part; it declares no lockstep groups (``groups`` None): its comparisons run one seed
+#: after another and keep only their numbers, so its memory does not grow with ``--seeds``.
+peers = Experiment(None, train, report)

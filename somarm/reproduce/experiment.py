@@ -3,7 +3,9 @@
 An experiment module declares its lockstep groups (``groups``: what it trains at a seed, read by
 ``sizes`` before anything is written), its training (``train``: the runs and whatever it measures on
 them that needs the trained learners) and its report (``report``: the claims, notes, choices and
-figures of its section), and binds them in one ``Experiment``, which ``runner.EXPERIMENTS`` names.
+figures of its section), and binds them in one ``Experiment``, which ``runner.EXPERIMENTS`` names. An
+experiment that trains no lockstep group (the peers' comparisons, through ``somarm.peers.compare``)
+declares ``groups`` None.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ class Experiment:
     no closed form to run in.
     """
 
-    groups: Callable[[Context], dict[str, list[RunConfig]]]
+    groups: Callable[[Context], dict[str, list[RunConfig]]] | None
+    """What it trains at a seed; None for an experiment without lockstep groups (the peers' comparisons)."""
     train: Callable[[Context], Any]
     report: Callable[[Context, Any], Section]
     backend: str | None = None
