@@ -150,12 +150,31 @@ def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, valu
 
 
 @numba.njit(cache=True, nogil=True)
-def _summed_any(q, slopes, linear, units, phi, x, weights, groups, mid, span, z, values):
-    """``_summed`` or, with ``linear``, ``_summed_linear``."""
+def expand(columns, action_shape, values):
+    """A factored table's action values: ``values[a] = columns[i] + columns[rows + j]`` for the action unit
+    ``a = (i, j)`` of a ``rows x cols`` grid (a line: ``columns[a]``)."""
+    if action_shape.shape[0] == 1:
+        for a in range(values.shape[0]):
+            values[a] = columns[a]
+        return
+    rows, cols = action_shape[0], action_shape[1]
+    for i in range(rows):
+        for j in range(cols):
+            values[i * cols + j] = columns[i] + columns[rows + j]
+
+
+@numba.njit(cache=True, nogil=True)
+def _summed_any(q, slopes, linear, units, phi, x, weights, groups, mid, span, z, factored, action_shape, columns,
+                values):
+    """``_summed`` or, with ``linear``, ``_summed_linear``; with ``factored`` the sum over the table's columns
+    (into ``columns``) expanded to every action unit (``expand``)."""
+    out = columns if factored else values
     if linear:
-        _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, values)
+        _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, out)
     else:
-        _summed(q, units, phi, values)
+        _summed(q, units, phi, out)
+    if factored:
+        expand(columns, action_shape, values)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -203,13 +222,14 @@ def _greedy(values, tie):
 
 
 @numba.njit(cache=True, nogil=True)
-def act_kernel(observations, input_weights, action_weights, q, slopes, linear, mid, span, groups, shapes, k, rows, p,
-               epsilon, low, high, wrap, gaussian, interpolated, action_shape, units, phi, chosen, actions):
+def act_kernel(observations, input_weights, action_weights, q, slopes, linear, factored, mid, span, groups, shapes, k,
+               rows, p, epsilon, low, high, wrap, gaussian, interpolated, action_shape, units, phi, chosen, actions):
     """Steps 1 to 5 for every trial: fills ``units``/``phi`` ``(n_trials, G, k)``, ``chosen`` ``(n_trials,)``
     and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring; ``slopes``
     ``(n_trials, G * n_units, n_action_units, obs_dim)`` read only with ``linear``)."""
-    n_a = q.shape[2]
+    n_a = action_weights.shape[1]
     values = np.empty(n_a)
+    columns = np.empty(q.shape[2])
     z = np.empty(observations.shape[1])
     part = np.empty(groups.shape[1])
     order = np.empty(k + 1, dtype=np.int64)
@@ -222,7 +242,7 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, linear, m
             unit = min(int(row[1] * n_a), n_a - 1)
         else:
             _summed_any(q[trial], slopes[trial], linear, units[trial], phi[trial], observations[trial],
-                        input_weights[trial], groups, mid, span, z, values)
+                        input_weights[trial], groups, mid, span, z, factored, action_shape, columns, values)
             unit = _greedy(values, row[2])
         out = actions[trial]
         for i in range(out.shape[0]):
@@ -237,15 +257,20 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, linear, m
 
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
-                 input_weights, action_weights, q, slopes, linear, mid, span, groups, shapes, k, alpha, lambda_s,
-                 lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors, grow_now):
+                 input_weights, action_weights, q, slopes, linear, factored, action_shape, mid, span, groups, shapes, k,
+                 alpha, lambda_s, lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors,
+                 grow_now):
     """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring;
     with ``linear`` each moved unit's constant and slopes take the normalised step of its own answer)."""
     n_groups, width = groups.shape
     n_units = q.shape[1] // n_groups
-    n_actions = q.shape[2]
+    n_actions = action_weights.shape[1]
+    n_columns = q.shape[2]  # n_actions, or with factored the grid's rows + cols
     values = np.empty(n_actions)
-    parts = np.zeros((n_groups, n_actions))
+    parts = np.zeros((n_groups, n_columns))
+    columns = np.zeros(n_columns)
+    psi_c = np.zeros(n_columns)
+    swap = np.zeros(n_columns, dtype=np.int64)
     psi_s = np.empty(n_units)
     psi_a = np.empty(n_actions)
     part = np.empty(width)
@@ -254,7 +279,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     next_units = np.empty((n_groups, k), dtype=np.int64)
     next_phi = np.empty((n_groups, k))
     z = np.empty(observations.shape[1])
-    step = alpha / n_groups
+    step = alpha / n_groups if not factored else alpha / (n_groups * action_shape.shape[0])
     wrapping = False
     for i in range(wrap.shape[0]):
         wrapping = wrapping or wrap[i]
@@ -266,33 +291,37 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
             features(next_observations[trial], input_weights[trial], groups, shapes[trial], k, next_units, next_phi, part, order,
                      squared)
             _summed_any(table, slopes[trial], linear, next_units, next_phi, next_observations[trial],
-                        input_weights[trial], groups, mid, span, z, values)
+                        input_weights[trial], groups, mid, span, z, factored, action_shape, columns, values)
             top = values[0]
             for a in range(1, n_actions):
                 if values[a] > top:
                     top = values[a]
             target = target + gamma * top
         # Each map's part of the sum at every action unit, and the sum.
-        for a in range(n_actions):
-            values[a] = 0.0
+        sums = columns if factored else values
+        for a in range(n_columns):
+            sums[a] = 0.0
         for g in range(n_groups):
-            for a in range(n_actions):
+            for a in range(n_columns):
                 parts[g, a] = 0.0
             for i in range(k):
                 if phi[trial, g, i] != 0.0:
                     u = units[trial, g, i]
                     if linear:
                         deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
-                        for a in range(n_actions):
+                        for a in range(n_columns):
                             total = table[u, a]
                             for d in range(z.shape[0]):
                                 total += slopes[trial, u, a, d] * z[d]
                             parts[g, a] += phi[trial, g, i] * total
                         continue
-                    for a in range(n_actions):
+                    for a in range(n_columns):
                         parts[g, a] += phi[trial, g, i] * table[u, a]
-            for a in range(n_actions):
-                values[a] += parts[g, a]
+            for a in range(n_columns):
+                sums[a] += parts[g, a]
+        if factored:
+            expand(columns, action_shape, values)
+            _factored_reach(a_k, action_shape, n_a, neighbourhood_q, psi_c, swap)
         neighbourhood_row(offsets_a, a_k, n_a, psi_a)
         # Step 7: the shared action map learns only if the perturbed action looks like an improvement.
         if target > values[a_k]:
@@ -308,6 +337,11 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                 if weight == 0.0:
                     continue
                 centre = units[trial, g, i]
+                if factored:
+                    _move_factored(table, slopes[trial], linear, observations[trial], input_weights[trial], groups[g],
+                                   mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1],
+                                   neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, target, values, parts[g])
+                    continue
                 if linear:
                     _move_linear(table, slopes[trial], observations[trial], input_weights[trial], groups[g], mid, span,
                                  z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1], neighbourhood_q, n_s,
@@ -391,32 +425,84 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
 
 
 @numba.njit(cache=True, nogil=True)
-def _scratch(n_groups, width, k, n_actions, obs_dim):
-    """The per-call scratch of the greedy kernels: ``values``, ``part``, ``order``, ``squared``, ``units``, ``phi``, ``z``."""
-    return (np.empty(n_actions), np.empty(width), np.empty(k + 1, dtype=np.int64), np.empty(k + 1),
-            np.empty((n_groups, k), dtype=np.int64), np.empty((n_groups, k)), np.empty(obs_dim))
+def _factored_reach(a_k, action_shape, n_a, neighbourhood_q, psi_c, swap):
+    """For a factored table and the tried action unit ``a_k``: each column's neighbourhood along its axis
+    (``max(0, 1 - d / (n_a + 1))``, d the steps from a_k's place on that axis; a_k's own columns alone
+    without neighbourhood Q-learning) into ``psi_c``, and in ``swap`` the action unit that is a_k with its
+    place on the column's axis moved to the column's."""
+    axes = action_shape.shape[0]
+    cols = action_shape[1] if axes == 2 else 1
+    place = (a_k // cols, a_k - (a_k // cols) * cols)
+    first = 0
+    for axis in range(axes):
+        for i in range(action_shape[axis]):
+            d = abs(i - place[axis])
+            if neighbourhood_q:
+                psi_c[first + i] = max(0.0, 1.0 - d / (n_a + 1.0))
+            else:
+                psi_c[first + i] = 1.0 if d == 0 else 0.0
+            swap[first + i] = i * cols + place[1] if axis == 0 else place[0] * cols + i
+        first += action_shape[axis]
 
 
 @numba.njit(cache=True, nogil=True)
-def _greedy_of(x, input_weights, q, slopes, linear, mid, span, groups, shapes, k, scratch):
+def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q,
+                   n_s, offsets_s, rate, psi_c, swap, target, values, parts):
+    """Step 8 for one of a map's k nearest units with a factored table: each unit m within reach (``centre``
+    alone without neighbourhood Q-learning) moves each column c with ``psi_c[c] > 0`` towards what the rest
+    leaves of the target of the action unit ``swap[c]``, by ``rate psi_S(m) psi_c[c]`` (local linear units:
+    the normalised step of ``_move_linear``)."""
+    r0 = (centre - first) // cols
+    c0 = (centre - first) - r0 * cols
+    reach = int(n_s + 1.0) if neighbourhood_q else 0
+    for r in range(max(0, r0 - reach), min(rows, r0 + reach + 1)):
+        for c in range(max(0, c0 - reach), min(cols, c0 + reach + 1)):
+            psi = max(0.0, 1.0 - offsets_s[abs(r - r0), abs(c - c0)] / (n_s + 1.0)) if neighbourhood_q else 1.0
+            if psi > 0.0:
+                m = first + r * cols + c
+                norm = 1.0 + deviation(x, weights[m], group, mid, span, z) if linear else 1.0
+                for col in range(table.shape[1]):
+                    if psi_c[col] > 0.0:
+                        answer = table[m, col]
+                        if linear:
+                            for d in range(z.shape[0]):
+                                answer += slopes[m, col, d] * z[d]
+                        change = rate * psi * psi_c[col] * (target - (values[swap[col]] - parts[col]) - answer) / norm
+                        table[m, col] += change
+                        if linear:
+                            for d in range(z.shape[0]):
+                                slopes[m, col, d] += change * z[d]
+
+
+@numba.njit(cache=True, nogil=True)
+def _scratch(n_groups, width, k, n_actions, obs_dim, n_columns):
+    """The per-call scratch of the greedy kernels: ``values``, ``part``, ``order``, ``squared``, ``units``, ``phi``,
+    ``z``, ``columns``."""
+    return (np.empty(n_actions), np.empty(width), np.empty(k + 1, dtype=np.int64), np.empty(k + 1),
+            np.empty((n_groups, k), dtype=np.int64), np.empty((n_groups, k)), np.empty(obs_dim), np.empty(n_columns))
+
+
+@numba.njit(cache=True, nogil=True)
+def _greedy_of(x, input_weights, q, slopes, linear, factored, action_shape, mid, span, groups, shapes, k, scratch):
     """The greedy action unit of one observation (ties to the lowest index); leaves the summed Q in
     ``scratch[0]`` and each map's nearest units in ``scratch[4]``."""
-    values, part, order, squared, units, phi, z = scratch
+    values, part, order, squared, units, phi, z, columns = scratch
     features(x, input_weights, groups, shapes, k, units, phi, part, order, squared)
-    _summed_any(q, slopes, linear, units, phi, x, input_weights, groups, mid, span, z, values)
+    _summed_any(q, slopes, linear, units, phi, x, input_weights, groups, mid, span, z, factored, action_shape, columns,
+                values)
     return _greedy(values, -1.0)
 
 
 @numba.njit(cache=True, nogil=True)
-def predict_kernel(observations, input_weights, action_weights, q, slopes, linear, mid, span, groups, shapes, k,
-                   interpolated, action_shape, low, high, wrap, out):
+def predict_kernel(observations, input_weights, action_weights, q, slopes, linear, factored, mid, span, groups, shapes,
+                   k, interpolated, action_shape, low, high, wrap, out):
     """Greedy actions of ``observations (n_trials, n_obs, obs_dim)`` into ``out (n_trials, n_obs, action_dim)``:
     the best summed Q, ties to the lowest index, the parabola's shift with the interpolated response."""
-    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2], observations.shape[2])
+    scratch = _scratch(groups.shape[0], groups.shape[1], k, action_weights.shape[1], observations.shape[2], q.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial], linear, mid, span,
-                              groups, shapes[trial], k, scratch)
+            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial], linear, factored,
+                              action_shape, mid, span, groups, shapes[trial], k, scratch)
             action = out[trial, n]
             for i in range(action.shape[0]):
                 action[i] = action_weights[trial, unit, i]
@@ -428,12 +514,13 @@ def predict_kernel(observations, input_weights, action_weights, q, slopes, linea
 
 
 @numba.njit(cache=True, nogil=True)
-def greedy_kernel(observations, input_weights, q, slopes, linear, mid, span, groups, shapes, k, units_out, first_out):
+def greedy_kernel(observations, input_weights, q, slopes, linear, factored, action_shape, n_actions, mid, span, groups,
+                  shapes, k, units_out, first_out):
     """The greedy action unit (ties to the lowest index) and the first map's nearest unit of
     ``observations (n_trials, n_obs, obs_dim)``, into ``units_out``/``first_out`` ``(n_trials, n_obs)``."""
-    scratch = _scratch(groups.shape[0], groups.shape[1], k, q.shape[2], observations.shape[2])
+    scratch = _scratch(groups.shape[0], groups.shape[1], k, n_actions, observations.shape[2], q.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
             units_out[trial, n] = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial],
-                                             linear, mid, span, groups, shapes[trial], k, scratch)
+                                             linear, factored, action_shape, mid, span, groups, shapes[trial], k, scratch)
             first_out[trial, n] = scratch[4][0, 0]

@@ -132,6 +132,12 @@ class SOMQConfig(ConfigBase):
     middle; each over its box's span), so one map's unit can hold how the value changes with every observed
     dimension (``somarm.learners.groups``). Runs the grouped kernels; not with ``grow_every``."""
 
+    action_factored: bool = False
+    """Q adds over the action grid's axes: ``Q(s, (i, j)) = Q_rows(s, i) + Q_cols(s, j)``, each map's table
+    holding a column per row and per column of the action grid (3 + 3 for a 3x3 grid, not 9), so with
+    ``action_init=grid`` each action dimension's value is learned from every step that tries any of its
+    places (``somarm.learners.groups``). Runs the grouped kernels."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -157,6 +163,9 @@ class SOMQConfig(ConfigBase):
         if not isinstance(self.local_linear, (bool, np.bool_)):
             raise ValueError(f"local_linear must be true or false, got {self.local_linear!r}")
         object.__setattr__(self, "local_linear", bool(self.local_linear))
+        if not isinstance(self.action_factored, (bool, np.bool_)):
+            raise ValueError(f"action_factored must be true or false, got {self.action_factored!r}")
+        object.__setattr__(self, "action_factored", bool(self.action_factored))
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -164,7 +173,14 @@ class SOMQConfig(ConfigBase):
     @property
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
-        return self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
+        return (self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
+                or self.action_factored)
+
+    @property
+    def table_columns(self) -> int:
+        """Columns of each input unit's row of Q: one per action unit, or with ``action_factored`` one per
+        row and per column of the action grid."""
+        return int(sum(self.action_shape)) if self.action_factored else int(np.prod(self.action_shape))
 
 
 def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray, span: float = 1.0) -> np.ndarray:
@@ -228,9 +244,10 @@ class SOMQLearner(MapLearner):
             size = max(obs_dim, grouping.dimensions_named(config.input_groups))
             table = grouping.group_table(grouping.parse_groups(config.input_groups, size))
             n_maps, width = table.shape
-            n_floats += n_trials * (n_maps * n_s * (width + n_a + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
-            if config.local_linear:  # a slope per unit, action unit and observed dimension
-                n_floats += n_trials * n_maps * n_s * n_a * size
+            n_c = config.table_columns
+            n_floats += n_trials * (n_maps * n_s * (width + n_c + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
+            if config.local_linear:  # a slope per unit, table column and observed dimension
+                n_floats += n_trials * n_maps * n_s * n_c * size
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -257,8 +274,8 @@ class SOMQLearner(MapLearner):
             self._shapes = np.tile(np.array(start, dtype=np.int64), (self.n_trials, n_maps, 1))
             self._errors = np.zeros((self.n_trials, n_maps * n_s))
             width = self.obs_dim if cfg.local_linear else 1
-            self.slopes = np.zeros((self.n_trials, n_maps * n_s if cfg.local_linear else 1, n_a if cfg.local_linear else 1,
-                                    width))
+            self.slopes = np.zeros((self.n_trials, n_maps * n_s if cfg.local_linear else 1,
+                                    cfg.table_columns if cfg.local_linear else 1, width))
             self._mid = (self.observation_low + self.observation_high) / 2.0
             self._span = self.observation_high - self.observation_low
             # No one input map of (n_units, obs_dim) units to draw: figures and views of a map skip it.
@@ -280,9 +297,12 @@ class SOMQLearner(MapLearner):
                 continue
             span = self.action_high - self.action_low
             self.action_weights[trial] = self.action_low + span * rng.random((n_a, self.action_dim))
-        # Grouped maps: each table starts at q_init / G, so that their sum starts at q_init.
+        # Grouped maps: each table starts at q_init / G (/ the action grid's axes when factored), so that
+        # the sum starts at q_init.
         n_rows, share = (self.input_weights.shape[1], self._groups.shape[0]) if cfg.grouped else (n_s, 1)
-        self.q = np.full((self.n_trials, n_rows, n_a), cfg.q_init / share if share > 1 else cfg.q_init)
+        if cfg.action_factored:
+            share *= len(cfg.action_shape)
+        self.q = np.full((self.n_trials, n_rows, cfg.table_columns), cfg.q_init / share if share > 1 else cfg.q_init)
         self._open_streams(row_width(cfg, self.action_dim))
         self._interpolated = cfg.response == "interpolated"
         self._wrap = self.action_periodic & cfg.periodic_actions  # all False: the paper's clipped box
@@ -341,7 +361,8 @@ class SOMQLearner(MapLearner):
         if self.config.grouped:
             groups.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, self.slopes,
-                self.config.local_linear, self._mid, self._span, self._groups, self._shapes, self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
+                self.config.local_linear, self.config.action_factored, self._mid, self._span, self._groups,
+                self._shapes, self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
                 self.action_high, self._wrap, self.config.noise == "gaussian", self._interpolated,
                 self._action_grid_shape, self._group_units, self._phi, self._units, self._actions,
             )
@@ -385,7 +406,8 @@ class SOMQLearner(MapLearner):
             groups.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
                 self._units, self._actions, self.input_weights, self.action_weights, self.q, self.slopes,
-                self.config.local_linear, self._mid, self._span, self._groups,
+                self.config.local_linear, self.config.action_factored, self._action_grid_shape, self._mid, self._span,
+                self._groups,
                 self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
                 values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
                 self.action_high, self._wrap, self._errors,
@@ -435,7 +457,8 @@ class SOMQLearner(MapLearner):
             many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self.slopes,
-                                  self.config.local_linear, self._mid, self._span, self._groups,
+                                  self.config.local_linear, self.config.action_factored, self._mid, self._span,
+                                  self._groups,
                                   self._shapes, self.config.k_nearest, self._interpolated, self._action_grid_shape,
                                   self.action_low, self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
@@ -456,6 +479,7 @@ class SOMQLearner(MapLearner):
         many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
         units = np.empty(many.shape[:2], dtype=np.int64)
         first = np.empty(many.shape[:2], dtype=np.int64)
-        groups.greedy_kernel(many, self.input_weights, self.q, self.slopes, self.config.local_linear, self._mid,
-                             self._span, self._groups, self._shapes, self.config.k_nearest, units, first)
+        groups.greedy_kernel(many, self.input_weights, self.q, self.slopes, self.config.local_linear,
+                             self.config.action_factored, self._action_grid_shape, self.action_weights.shape[1],
+                             self._mid, self._span, self._groups, self._shapes, self.config.k_nearest, units, first)
         return units.reshape(x.shape[:-1]), first.reshape(x.shape[:-1])

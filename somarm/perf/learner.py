@@ -58,11 +58,11 @@ REPRESENTATIONS = (
     ("45 pair maps of 10x10, 3 nearest", {**_PAIRS, "k_nearest": 3}),
     ("45 pair maps growing to 10x10", {**_PAIRS, "grow_every": 1000}),
     ("5 maps of 10x10 (chunks:2)", {**_PAIRS, "input_groups": "chunks:2"}),
-    ("10 single maps of 20, 3 nearest, linear", {**_PAIRS, "input_groups": "singles", "input_shape": (20,),
-                                                 "k_nearest": 3, "local_linear": True}),
-    ("45 pair maps of 10x10, 3 nearest, linear", {**_PAIRS, "k_nearest": 3, "local_linear": True}),
-    ("45 pair maps of 5x5, 3 nearest, linear", {**_PAIRS, "input_shape": (5, 5), "k_nearest": 3, "local_linear": True}),
-    ("45 pair maps of 10x10, 3 nearest, factored", {**_PAIRS, "k_nearest": 3, "action_factored": True}),
+    ("10 singles of 20, 3 nearest, linear", {**_PAIRS, "input_groups": "singles", "input_shape": (20,),
+                                             "k_nearest": 3, "local_linear": True}),
+    ("45 pairs 10x10, 3 nearest, linear", {**_PAIRS, "k_nearest": 3, "local_linear": True}),
+    ("45 pairs 5x5, 3 nearest, linear", {**_PAIRS, "input_shape": (5, 5), "k_nearest": 3, "local_linear": True}),
+    ("45 pairs 10x10, 3 nearest, factored", {**_PAIRS, "k_nearest": 3, "action_factored": True}),
 )
 
 

@@ -43,7 +43,10 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
 @pytest.mark.parametrize("changes", [{"input_groups": "pairs"}, {"k_nearest": 3},
                                      {"input_groups": "0,2;1,3", "k_nearest": 2, "response": "interpolated"},
                                      {"input_groups": "singles", "k_nearest": 2, "local_linear": True},
-                                     {"input_groups": "pairs", "local_linear": True, "neighbourhood_q": False}])
+                                     {"input_groups": "pairs", "local_linear": True, "neighbourhood_q": False},
+                                     {"input_groups": "pairs", "action_factored": True, "k_nearest": 2},
+                                     {"input_groups": "singles", "action_factored": True, "local_linear": True,
+                                      "response": "interpolated", "neighbourhood_q": False}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
@@ -261,3 +264,42 @@ def test_local_linear_answers_are_the_constant_plus_the_slopes_along_the_place_r
 def test_local_linear_is_refused_with_growing_maps_in_one_line():
     with pytest.raises(ValueError, match="local_linear applies to maps of a fixed size"):
         SOMQConfig(local_linear=True, grow_every=10)
+
+
+def _planted_separable(factored, steps, seed):
+    """One input unit, a 5x5 grid of actions over [-1, 1]^2, each step a random unit rewarded
+    ``-(a_0 - 0.5)^2 - (a_1 + 0.5)^2`` (the two action dimensions' parts add); returns the share of 40
+    trials whose greedy unit is the best one, (0.5, -0.5)."""
+    config = SOMQConfig(
+        input_shape=(1,), action_shape=(5, 5), action_init="grid", alpha=Schedule(0.5), lambda_s=Schedule(0.0),
+        lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0), p=Schedule(1.0), epsilon=Schedule(0.0),
+        q_init=-10.0, action_factored=factored, input_groups="0")
+    learner = SOMQLearner(config, n_trials=40, seed=seed, observation_low=[0.0], observation_high=[1.0],
+                          action_low=[-1.0, -1.0], action_high=[1.0, 1.0])
+    x = np.full((40, 1), 0.5)
+    for _ in range(steps):
+        a = learner.act(x)
+        learner.learn(-((a[:, 0] - 0.5) ** 2) - (a[:, 1] + 0.5) ** 2)
+    return float(np.mean(np.all(learner.predict(x) == [0.5, -0.5], axis=1)))
+
+
+def test_a_factored_table_finds_the_best_of_a_separable_reward_from_fewer_tries():
+    # 160 random tries of 25 action units at a learning rate of 0.5: the full table's values of the best unit
+    # and its neighbours have had a few tries each, not yet enough to tell them apart; the factored one
+    # learns each axis's 5 places from every try.
+    factored = _planted_separable(True, 160, 2)
+    full = _planted_separable(False, 160, 2)
+    assert factored >= 0.9, factored
+    assert full <= 0.75, full
+
+
+def test_a_factored_table_holds_a_column_per_place_of_each_axis_and_answers_their_sum():
+    config = SOMQConfig(input_shape=(2,), action_shape=(2, 3), action_init="grid", action_factored=True, p=0.0,
+                        epsilon=0.0, input_groups="0", q_init=4.0)
+    learner = SOMQLearner(config, observation_low=[0.0], observation_high=[1.0], action_low=[-1.0, -1.0],
+                          action_high=[1.0, 1.0])
+    assert learner.q.shape == (1, 2, 5) and np.all(learner.q == 2.0)  # 2 + 3 columns, q_init / 2 axes
+    learner.input_weights[0, :, 0] = [0.0, 1.0]
+    learner.q[0, 0] = [0.0, 1.0, 0.0, 0.0, 0.5]  # rows: place 1 best; cols: place 2 best
+    np.testing.assert_array_equal(learner.predict([[0.1]]), [[1.0, 1.0]])
+    assert learner.greedy_units(np.array([[0.1]]))[1][0] == 1 * 3 + 2
