@@ -1,6 +1,6 @@
 """The comparison part: SOM-Q beside a fixed action grid and SB3's TD3 and SAC (``--only peers``).
 
-Not part of the default reproduction (TD3 and SAC cost about 20 ms per sample, so the part takes
+Not part of the default reproduction (TD3 and SAC take a gradient step per sample, so the part takes
 far longer than the paper's experiments); ``somarm reproduce --only peers`` runs it.
 """
 
