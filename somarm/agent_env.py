@@ -71,6 +71,7 @@ def bounds_of(env: Any, task: str, params: dict[str, Any], seed: int) -> dict[st
     """The scaling bounds of an environment object whose wrappers change its observation Box from its
     id's (NormalizeObservation's is infinite): estimated on a copy of it, so ``config.json`` keeps them;
     none where the Box is its id's."""
+    from somarm.learners import presets
     from somarm.tasks import gym_envs
 
     built = gym_envs.record_for(task).params_from(params)
@@ -78,7 +79,9 @@ def bounds_of(env: Any, task: str, params: dict[str, Any], seed: int) -> dict[st
     box = gym_envs.box_of(env.observation_space)
     if all(np.array_equal(box[k], facts[k]) for k in box):
         return {}
-    low, high = gym_envs.estimate_bounds(built, seed, env=env)
+    # how the task's preset asks its bounds to be found (its observation ranges, the dimensions widened)
+    how = presets.task_params_of(gym_envs.record_for(task).preset, task)
+    low, high = gym_envs.estimate_bounds(built, seed, env=env, how=how)
     return {"observation_low": list(low), "observation_high": list(high)}
 
 
