@@ -426,8 +426,11 @@ def _every_help():
     from somarm.cli import _parser
 
     yield []
+    from somarm.cli import _BENCHMARKS
+
     yield from ([name] for name in _parser()._subparsers._group_actions[0].choices if name != "bench")
     yield ["view"]
+    yield from (["bench", name] for name in _BENCHMARKS)
 
 
 @pytest.mark.parametrize("argv", list(_every_help()), ids=lambda argv: " ".join(argv) or "somarm")
