@@ -125,7 +125,7 @@ def _env_of(policy: Any, env: Any) -> Any:
             raise ValueError("SOMQ needs an environment: give an environment, its Gymnasium id or a task name, "
                              "SOMQ(\"Pendulum-v1\")")
         return policy
-    if not (isinstance(policy, str) and policy in _POLICY_NAMES):
+    if policy is not None and not (isinstance(policy, str) and policy in _POLICY_NAMES):
         raise ValueError(f"SOMQ learns one policy, its maps, over Box observations: give policy 'MlpPolicy' (SB3's "
                          f"name for it) or none, got policy {policy!r}")
     return env

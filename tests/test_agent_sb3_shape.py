@@ -21,6 +21,7 @@ def test_a_policy_name_before_the_environment_is_taken_as_sb3_takes_it():
     plain = SOMQ("Pendulum-v1", seed=2).learn(100)
     assert _same_actions(SOMQ("MlpPolicy", "Pendulum-v1", seed=2).learn(100), plain)
     assert _same_actions(SOMQ(policy="MlpPolicy", env=gym.make("Pendulum-v1"), seed=2).learn(100), plain)
+    assert _same_actions(SOMQ(env="Pendulum-v1", seed=2).learn(100), plain)
 
 
 @pytest.mark.parametrize(("args", "kwargs", "expected"), [
