@@ -32,3 +32,28 @@ def test_the_map_check_finds_a_module_left_out():
     page = "## Module map\n| `run/` | `loop.py` |\n| `io.py` | writes |\n## Data flow\n"
     rows = _rows(page)
     assert "`loop.py`" in rows["run/"] and "`stepper.py`" not in rows["run/"] and "io.py" in rows
+
+
+def _imports(package: str) -> dict[str, set[str]]:
+    """Every ``somarm`` module each module of ``somarm/<package>/`` imports, anywhere in its body."""
+    import ast
+
+    found = {}
+    for path in sorted((PACKAGE / package).rglob("*.py")):
+        names = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                names.update([node.module, *(f"{node.module}.{alias.name}" for alias in node.names)])
+        found[str(path.relative_to(PACKAGE))] = {n for n in names if n.startswith("somarm")}
+    return found
+
+
+def test_learners_and_tasks_never_import_each_other():
+    for package, other in (("learners", "tasks"), ("tasks", "learners")):
+        crossing = {module: sorted(n for n in names if n == f"somarm.{other}" or n.startswith(f"somarm.{other}."))
+                    for module, names in _imports(package).items()}
+        assert not {m: n for m, n in crossing.items() if n}, f"{package} imports {other}: {crossing}"
+    # the check sees an import inside a function body too
+    assert "somarm.learners.config_class" in _imports("learners")["learners/presets.py"]
