@@ -311,6 +311,7 @@ def make_plan(config: CompareConfig) -> Plan:
     gym_id = gym_envs.env_id_of(config.task) if gym_envs.env_task(config.task) else None
     runners: dict[str, Runner] = {}
     task = tasks.make(config.task, seed=config.seed, **params)
+    _check_sizes(config, task)
     for kind in config.learners:
         if kind in PEERS:
             runners[kind] = PeerRunner(kind, peer_budget(kind, config), gym_id)
@@ -321,6 +322,33 @@ def make_plan(config: CompareConfig) -> Plan:
         except ValueError as exc:
             raise ValueError(f"{kind} cannot learn {config.task}: {exc}") from None
     return Plan(config, params, runners)
+
+
+#: The most units (learners times seeds) one comparison holds: a seed record each.
+MAX_UNITS = 100_000
+
+
+def _check_sizes(config: CompareConfig, task) -> None:
+    """Refuse, by arithmetic before anything is listed or drawn, more units than a comparison holds and
+    scoring observations (or episode starts) that cannot fit in memory."""
+    from somarm.validation import check_memory
+
+    n_units = len(config.learners) * config.seeds
+    if n_units > MAX_UNITS:
+        raise ValueError(f"--seeds {config.seeds} with {len(config.learners)} learner(s) is {n_units} units, more "
+                         f"than the {MAX_UNITS} a comparison holds; give fewer --seeds")
+    if task.episodic:
+        check_memory(f"--episodes {config.episodes}", _EPISODE_BYTES * config.episodes, "give fewer --episodes")
+    else:
+        check_memory(f"--observations {config.observations}", _OBSERVATION_BYTES * config.observations,
+                     "give fewer --observations")
+
+
+#: Bytes one scoring observation costs at its peak (the policy's working arrays over all of them at
+#: once; about 4 KiB measured for tabular on reach2), and one greedy episode (about 7 KiB measured on
+#: gym:Pendulum-v1): twice that, as margin.
+_OBSERVATION_BYTES = 8 * 2**10
+_EPISODE_BYTES = 16 * 2**10
 
 
 @functools.lru_cache(maxsize=8)

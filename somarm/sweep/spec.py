@@ -23,6 +23,9 @@ from somarm.validation import check_int, parse_float
 
 __all__ = ["TASK_PREFIX", "Axis", "SweepSpec", "parse_grid", "parse_random", "preset_value", "same_value", "config_key"]
 
+#: The most runs (points times seeds) one sweep holds: a row file each, and days of training long before.
+MAX_RUNS = 100_000
+
 #: Keys with this prefix are task parameters (``--task-set``); all others are learner settings (``--set``).
 TASK_PREFIX = "task."
 
@@ -143,8 +146,16 @@ class SweepSpec:
         if self.n_samples and not has_random:
             raise ValueError("--samples needs a --random axis")
         check_int("--seeds", self.n_seeds)
+        self._check_size()
         base = self.base_config(self.seed).resolved()
         return dataclasses.replace(self, preset=base.preset, n_steps=base.n_steps)
+
+    def _check_size(self) -> None:
+        """Refuse, by arithmetic before any point is listed, a sweep of more than ``MAX_RUNS`` runs."""
+        n_points = math.prod(len(a.values) for a in self.axes if not a.is_random) * max(self.n_samples, 1)
+        if n_points * self.n_seeds > MAX_RUNS:
+            raise ValueError(f"the sweep is {n_points} point(s) at {self.n_seeds} seed(s), {n_points * self.n_seeds} "
+                             f"runs, more than the {MAX_RUNS} a sweep holds; give fewer values, --samples or --seeds")
 
     def seeds(self) -> range:
         """The run seeds of every point."""
