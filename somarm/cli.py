@@ -12,7 +12,9 @@ from pathlib import Path
 from somarm import __version__
 from somarm.console import guard_standard_streams
 from somarm.helptext import PlainHelpFormatter
-from somarm.validation import OneLineParser, check_int, check_memory, whole_number
+
+# Only the standard library and these light modules load before main() runs: what a command needs
+# (numpy and beyond) is imported inside main, where Ctrl-C during the import ends in one line.
 
 __all__ = ["main"]
 
@@ -222,6 +224,7 @@ def _cmd_evaluate(args) -> int:
     from somarm import run, tasks
     from somarm.run import evaluation
     from somarm.run.config import parse_assignments
+    from somarm.validation import check_int, check_memory
 
     check_int("--observations", args.observations)
     config, learner = _load_run(args.run)
@@ -347,6 +350,8 @@ def _parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     """The command line's parser; with ``commands``, only those commands get the options that need the run
     machinery imported (``train``'s and ``sweep``'s run settings), so that a listing or ``--help`` answers
     at once. None: every command complete (the docs' reference)."""
+
+    from somarm.validation import OneLineParser, whole_number
 
     def complete(command: str) -> bool:
         return commands is None or command in commands

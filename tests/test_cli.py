@@ -475,3 +475,12 @@ def test_python_dash_m_somarm_is_the_somarm_command():
 
     done = subprocess.run([sys.executable, "-m", "somarm", "--version"], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0 and done.stdout.strip() == f"somarm {somarm.__version__}", done.stderr
+
+
+def test_the_entry_point_imports_nothing_heavy_before_main_guards_ctrl_c():
+    # Ctrl-C while numpy loads must end in "somarm: interrupted", which only main() can print: so the
+    # module the console script imports first loads the standard library and somarm's light modules only.
+    code = "import sys, somarm.cli; print(' '.join(sorted(m for m in sys.modules if m.split('.')[0] in " \
+           "('numpy', 'somarm') and m not in ('somarm', 'somarm.cli', 'somarm.console', 'somarm.helptext'))))"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.strip() == "", done.stdout + done.stderr
