@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm import run
+from somarm import run, tasks
 from somarm.agent_env import bounds_of, task_name, task_on
 from somarm.protocols import BatchedTask, Learner
 from somarm.run import RunConfig
@@ -274,8 +274,10 @@ class SOMQ:
         self._wall_time += curves.wall_time
         self.interrupted = curves.interrupted and not (hook is not None and hook.stopped)
         if self.verbose:
+            default = tasks.record(self.config.task).n_steps  # the preset's run length: fewer steps learn less
+            budget = f"; the task's preset is scored after {default:,}" if self.learner.t < default else ""
             print(f"SOMQ on {self.config.task}: {curves.steps_done} steps x {self.config.n_trials} trial(s) in "
-                  f"{curves.wall_time:.1f} s (num_timesteps {self.num_timesteps})", flush=True)
+                  f"{curves.wall_time:.1f} s (num_timesteps {self.num_timesteps}{budget})", flush=True)
         if self.interrupted:
             warnings.warn(f"SOMQ.learn was stopped by a signal after {curves.steps_done} of {steps} steps; the "
                           f"model keeps what it learned (num_timesteps {done})", LearningInterrupted, stacklevel=2)

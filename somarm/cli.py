@@ -156,10 +156,19 @@ def _train_into(out: Path, group, args, owner) -> int:
     else:
         greedy = f"greedy mean reward {extra.get('greedy_mean_reward', float('nan')):+.4f}"
     print(f"done: {result.steps_done} steps x {config.n_trials} trial(s) in {result.wall_time:.1f} s; "
-          f"{greedy}; results in {out}", flush=True)
+          f"{greedy}{_budget_note(config)}; results in {out}", flush=True)
     if view is not None:
         _keep_viewing(view)
     return 0
+
+
+def _budget_note(config) -> str:
+    """Where a run took fewer steps than its task's default run (its preset's run length, which the
+    benchmarks are scored after), a note saying so: a short try-out learns less, and is not broken."""
+    from somarm import tasks
+
+    default = tasks.record(config.task).n_steps
+    return f" (the task's default run is {default:,} steps)" if config.n_steps < default else ""
 
 
 def _keep_viewing(view) -> None:

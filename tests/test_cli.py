@@ -484,3 +484,14 @@ def test_the_entry_point_imports_nothing_heavy_before_main_guards_ctrl_c():
            "('numpy', 'somarm') and m not in ('somarm', 'somarm.cli', 'somarm.console', 'somarm.helptext'))))"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0 and done.stdout.strip() == "", done.stdout + done.stderr
+
+
+def test_a_run_shorter_than_its_tasks_default_says_so_and_a_full_one_does_not(tmp_path, capsys):
+    from somarm import tasks
+
+    default = tasks.record("throw").n_steps
+    for steps, said in ((default // 10, True), (default, False)):
+        assert main(["train", "throw", "--steps", str(steps), "--no-progress", "--no-figures",
+                     "--out", str(tmp_path / str(steps))]) == 0
+        done = capsys.readouterr().out
+        assert (f"default run is {default:,} steps" in done) is said, done
