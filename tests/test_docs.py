@@ -186,6 +186,17 @@ def test_the_budget_tables_samples_and_seconds_are_the_presets_and_the_reports(p
             assert target.endswith(f"after {int(samples):,} samples, {round(float(wall))} s"), (env_id, target)
 
 
+def test_somqs_docstring_gives_each_benchmarks_samples_and_seconds_as_the_results_page():
+    from somarm.agent import SOMQ
+
+    rows = _budget_rows(ROOT / "docs" / "results.md")
+    lines = {line.split()[0]: line for line in SOMQ.__doc__.splitlines() if line.strip()}
+    for env_id in ("Pendulum-v1", "MountainCarContinuous-v0", "InvertedPendulum-v5", "Reacher-v5"):
+        trains, seconds = rows[env_id][:2]
+        said = lines[env_id].split()
+        assert said[1] == trains.split()[0] and " ".join(said[2:4]).rstrip(";") == seconds, (env_id, said)
+
+
 def test_every_command_the_readme_gives_runs_from_the_venv():
     text = README.read_text()
     commands = [part.strip() for block in re.findall(r"^```bash\n(.*?)^```", text, re.S | re.M)
