@@ -3,7 +3,9 @@
 - ``docs/cli.md``: every ``somarm`` subcommand's ``--help``, rendered from the parsers in
   ``somarm.cli`` (``bench NAME`` and ``view`` forward to their own parsers and are rendered
   through the same entry point, ``somarm.cli.main``);
-- ``docs/changelog.md``: the top-level ``CHANGELOG.md``.
+- ``docs/changelog.md``: the top-level ``CHANGELOG.md``;
+- ``docs/learners.md``: every preset's choices, from ``somarm/learners/preset_choices.md`` (the file the
+  report quotes), each preset a level-4 heading.
 
 Each page holds a pair of marker comments; the hook replaces them and what lies between (a note for
 readers of the unbuilt page). A page without the markers is left alone.
@@ -25,10 +27,11 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 CLI_MARKER = "somarm-cli-reference"
 CHANGELOG_MARKER = "CHANGELOG.md"
+CHOICES_MARKER = "preset_choices.md"
 #: the width help is wrapped to, so the page does not depend on the terminal that built it
 HELP_COLUMNS = 80
 
-__all__ = ["commands", "help_text", "cli_reference", "on_page_markdown"]
+__all__ = ["commands", "help_text", "cli_reference", "preset_choices", "on_page_markdown"]
 
 
 def _subparsers(parser: argparse.ArgumentParser) -> argparse._SubParsersAction:
@@ -99,7 +102,14 @@ def _fill(markdown: str, marker: str, text) -> str:
     return pattern.sub(lambda _: text(), markdown) if pattern.search(markdown) else markdown
 
 
+def preset_choices() -> str:
+    """The presets' choices from their first section on, each preset a level-4 heading."""
+    text = (ROOT / "somarm" / "learners" / "preset_choices.md").read_text()
+    return re.sub(r"^## (\S+)$", r"#### `\1`", text[text.index("\n## ") + 1:], flags=re.M) + "\n"
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    """MkDocs hook: fill the marked parts of ``cli.md`` and ``changelog.md``."""
+    """MkDocs hook: fill the marked parts of ``cli.md``, ``changelog.md`` and ``learners.md``."""
     markdown = _fill(markdown, CLI_MARKER, cli_reference)
+    markdown = _fill(markdown, CHOICES_MARKER, preset_choices)
     return _fill(markdown, CHANGELOG_MARKER, lambda: (ROOT / "CHANGELOG.md").read_text())
