@@ -16,7 +16,7 @@ folder. Settings are typed values: the command line's text is read once, at the 
 from somarm.run.build import check_memory_needs, make, make_learner, make_task, memory_needs
 from somarm.run.config import RunConfig, add_options, from_options, parse_assignments
 from somarm.run.folder import load, task_for, write, write_claimed
-from somarm.run.group import RunGroup, RunResult, share_lanes, train, train_group
+from somarm.run.group import RunFailed, RunGroup, RunResult, share_lanes, train, train_group
 from somarm.run.loop import final_rewards
 from somarm.run.summary import greedy_cost, greedy_measures, greedy_summary, summary
 
@@ -24,6 +24,7 @@ __all__ = [
     "write_claimed",
     "RunConfig",
     "RunResult",
+    "RunFailed",
     "add_options",
     "from_options",
     "parse_assignments",

@@ -41,6 +41,8 @@ def write(result: RunResult, out_dir: str | Path, *, figures: bool = True,
     except OSError as exc:
         raise ValueError(f"cannot create output folder {out}: {exc.strerror or exc}") from None
     config = result.config
+    if result.failed is not None:  # a run the task cut short says so, beside its partial results
+        extra_summary = {**(extra_summary or {}), "failed": result.failed}
     data = summary(result, extra_summary)
     steps = [
         ("learner.npz", lambda: result.learner.save(out / "learner.npz")),
@@ -76,7 +78,8 @@ def write_claimed(result: RunResult, owner: FolderClaim, **kwargs: Any) -> None:
       **kwargs: ``write``'s (``figures``, ``extra_summary``).
 
     Raises:
-      ValueError: a file cannot be written (one line; it says where the earlier run is kept).
+      ValueError: a file cannot be written (one line; it says where the earlier run is kept), or the
+        run failed mid-way (``RunResult.failed``: written, then said in one line).
     """
     try:
         write(result, owner.path, **kwargs)
@@ -86,6 +89,10 @@ def write_claimed(result: RunResult, owner: FolderClaim, **kwargs: Any) -> None:
             raise ValueError(f"{exc}; the new run was dropped and the earlier run in {owner.folder} is kept") from None
         raise
     owner.finish(not result.interrupted)
+    if result.failed is not None:
+        kept = (f"the earlier run in {owner.folder} is kept" if owner.replacing else
+                f"the {result.steps_done} steps before it are kept in {owner.folder}, marked failed in summary.json")
+        raise ValueError(f"{result.failed}; {kept}")
 
 
 def write_summary(result: RunResult, out_dir: str | Path, extra_summary: dict[str, Any] | None = None) -> Path:

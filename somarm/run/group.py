@@ -12,7 +12,7 @@ from somarm.run.build import check_memory_needs, make_learner, make_task
 from somarm.run.config import RunConfig
 from somarm.run.loop import Episodes, StepHook, loop
 
-__all__ = ["RunResult", "train", "train_group", "share_lanes", "RunGroup"]
+__all__ = ["RunResult", "RunFailed", "train", "train_group", "share_lanes", "RunGroup"]
 
 
 @dataclass
@@ -31,6 +31,9 @@ class RunResult:
     """Copies of the maps (and Q) of every trial taken after the steps asked for in ``train``."""
     episodes: Episodes | None = None
     """The training episodes that ended (a multi-step task's; None for one-step tasks)."""
+    failed: str | None = None
+    """Why training stopped early where the task failed (it raised, or gave a non-finite observation),
+    in one line; ``interrupted`` is then True, and the run holds the steps before the failure."""
 
     @property
     def block_returns(self) -> np.ndarray | None:
@@ -66,6 +69,7 @@ def train(config: RunConfig, *, progress: bool = True, on_step: StepHook | None 
 
     Raises:
       ValueError: a bad setting (before anything is trained).
+      RunFailed: the task failed mid-run (a ValueError holding the partial result).
     """
     return train_group([config], progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)[0]
 
@@ -81,8 +85,26 @@ def train_group(configs: list[RunConfig], *, progress: bool = True, on_step: Ste
 
     Returns:
       One ``RunResult`` per config, in order. ``on_step`` sees the whole group's arrays (one task).
+
+    Raises:
+      RunFailed: the task failed mid-run (a ValueError holding the partial results).
     """
-    return RunGroup(configs).train(progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)
+    results = RunGroup(configs).train(progress=progress, on_step=on_step, label=label, snapshots_at=snapshots_at)
+    if results[0].failed is not None:
+        raise RunFailed(results)
+    return results
+
+
+class RunFailed(ValueError):
+    """Training stopped because the task failed (``RunResult.failed`` is the message); ``results`` holds
+    the runs up to the failure, which a caller may still write (``run.write`` marks them failed)."""
+
+    def __init__(self, results: list[RunResult]) -> None:
+        super().__init__(results[0].failed)
+        self.results = results
+
+    def __reduce__(self):  # sent to another process as its message alone
+        return ValueError, (str(self),)
 
 
 def share_lanes(trials: list[int], lanes: int) -> list[int]:
@@ -147,13 +169,17 @@ class RunGroup:
               snapshots_at: tuple[int, ...] = ()) -> list[RunResult]:
         """Train the built learners once (see ``train_group``); one ``RunResult`` per config.
 
+        A task that fails (raises, or gives a non-finite observation) stops the training there: the
+        results hold the steps before it, ``interrupted`` and ``failed`` (the error's one line) set,
+        for the caller to write (``run.write_claimed`` keeps them, marked failed, and then raises).
+
         Raises:
           ValueError: ``on_step`` for a group of several tasks or seeds.
         """
         first = self.configs[0]
         curves = loop(self.tasks, self.learners, self.parts, owners=self.owners, n_steps=first.n_steps,
                       block=first.block, progress=progress, on_step=on_step,
-                      label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at)
+                      label=label or f"{first.task}/{first.learner}", snapshots_at=snapshots_at, keep_failed=True)
         results = []
         for config, learner, column, taken in zip(self.configs, self.learners, self.columns, curves.snapshots,
                                                   strict=True):
@@ -170,5 +196,6 @@ class RunGroup:
                 interrupted=curves.interrupted,
                 snapshots=taken,
                 episodes=None if curves.episodes is None or not own_task.episodic else curves.episodes.of(column),
+                failed=curves.failed,
             ))
         return results

@@ -44,6 +44,9 @@ class Curves:
     """Per learner: copies of its maps (and Q) after each step asked for."""
     episodes: Episodes | None = None
     """Every finished training episode of the multi-step tasks (None: one-step tasks only)."""
+    failed: str | None = None
+    """Why training stopped early where a task failed (it raised, or gave a non-finite observation):
+    one line; ``interrupted`` is then True and the curves hold the steps before it."""
 
 
 def loop(
@@ -59,13 +62,16 @@ def loop(
     label: str = "",
     snapshots_at: tuple[int, ...] = (),
     episode_log: EpisodeLog | None = None,
+    keep_failed: bool = False,
 ) -> Curves:
     """Train ``learners`` (learner i owns trials ``parts[i]`` of its task) for ``n_steps`` steps.
 
     Each step the ``Stepper`` steps every task and learner, the ``BlockRecorder`` adds the rewards to
     the learning curves, ``on_step`` sees the step, and ``Snapshots`` copies the maps at the steps
-    asked for. Ctrl-C or SIGTERM stops at the end of the current step (``interrupted=True``); an
-    ``on_step`` hook that raises ``KeyboardInterrupt`` stops the same way.
+    asked for. Ctrl-C, SIGTERM or SIGHUP stops at the end of the current step (``interrupted=True``); an
+    ``on_step`` hook that raises ``KeyboardInterrupt`` stops the same way. A step that fails (a task
+    raises, or gives a non-finite observation) raises, or with ``keep_failed`` stops there too, with
+    ``failed`` saying why.
 
     Args:
       task: the batched task of all trials, or several tasks stepped together each step (one
@@ -83,6 +89,8 @@ def loop(
       snapshots_at: steps after which to copy each learner's maps.
       episode_log: the log of the tasks' training episodes to go on with (one made here by default);
         the curves' ``episodes`` are those that ended in this call, at this call's steps.
+      keep_failed: a failed step ends the loop with ``failed`` set (the steps before it kept); by
+        default its exception is raised.
 
     Returns:
       The ``Curves`` of every trial, the tasks' trials side by side in task order.
@@ -101,10 +109,17 @@ def loop(
     start = time.perf_counter()
     step = 0
     interrupted = False
+    failed = None
     with stop_between_steps() as stop:
         try:
             while step < n_steps:
-                rewards = stepper.step()
+                try:
+                    rewards = stepper.step()
+                except Exception as exc:  # the task's (an environment's) failure: keep the steps before it
+                    if not keep_failed:
+                        raise
+                    failed, interrupted = _failure(step + 1, exc), True
+                    break
                 step += 1
                 if recorder.record(rewards):
                     bar.update(step, recorder.measures)
@@ -119,7 +134,13 @@ def loop(
     wall_time = time.perf_counter() - start
     bar.close(step, recorder.measures)
     block_means, block_sq_means, episodes = recorder.curves()
-    return Curves(block_means, block_sq_means, step, wall_time, interrupted, snapshots.taken, episodes)
+    return Curves(block_means, block_sq_means, step, wall_time, interrupted, snapshots.taken, episodes, failed)
+
+
+def _failure(step: int, exc: Exception) -> str:
+    """A failed step in one line: ``training failed at step 31: ValueError: its message's first line``."""
+    said = (str(exc).strip().splitlines() or [""])[0][:300]
+    return f"training failed at step {step}: {type(exc).__name__}" + (f": {said}" if said else "")
 
 
 def final_blocks(n_blocks: int, block: int, window: int) -> int:

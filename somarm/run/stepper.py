@@ -22,6 +22,7 @@ class Stepper:
 
     ``step()`` takes one step of everything and returns the rewards of all trials side by side,
     ``(n_trials,)``; ``observations``, ``actions`` and ``rewards`` hold each task's arrays of that step.
+    An observation that is not finite raises ``FloatingPointError`` before a learner sees it.
 
     Args:
       tasks: the batched tasks, stepped together each step (one physics call where they allow it:
@@ -44,7 +45,7 @@ class Stepper:
         all trials side by side, ``(n_trials,)``."""
         tasks, learners, owners, parts = self.tasks, self.learners, self.owners, self.parts
         for i, task in enumerate(tasks):
-            self.observations[i] = task.reset()
+            self.observations[i] = _finite(task.reset(), "observation")
         for j, learner in enumerate(learners):
             i, part = owners[j], parts[j]
             self.actions[i][part] = learner.act(self.observations[i][part])
@@ -53,7 +54,21 @@ class Stepper:
             i, part = owners[j], parts[j]
             if self.episodic[i]:  # the next state and whether the episode ended there
                 done = cast(EpisodicTask, tasks[i])
-                learner.learn(self.rewards[i][part], done.next_observations[part], done.terminal[part])
+                learner.learn(self.rewards[i][part], _finite(done.next_observations[part], "next observation"),
+                              done.terminal[part])
             else:
                 learner.learn(self.rewards[i][part])
         return self.rewards[0] if len(tasks) == 1 else np.concatenate(self.rewards)
+
+
+def _finite(observations: np.ndarray, what: str) -> np.ndarray:
+    """``observations`` if every value is finite; a learner fed NaN learns NaN from then on.
+
+    Raises:
+      FloatingPointError: naming the first trial whose observation is not finite.
+    """
+    if not np.isfinite(observations).all():
+        trial = int(np.flatnonzero(~np.isfinite(observations).reshape(len(observations), -1).all(axis=1))[0])
+        raise FloatingPointError(f"the task's {what} of trial {trial} is not finite "
+                                 f"({np.asarray(observations[trial]).ravel()[:4].tolist()})")
+    return observations

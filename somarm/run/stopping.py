@@ -1,4 +1,6 @@
-"""How a run stops: Ctrl-C (SIGINT) and SIGTERM, handled here and nowhere else.
+"""How a run stops: Ctrl-C (SIGINT), SIGTERM and SIGHUP (a closed terminal), handled here and nowhere else.
+
+SIGHUP is handled as SIGTERM is: wherever "SIGTERM" is said below, SIGHUP does the same.
 
 Training reads a flag between steps (``stop_between_steps``), so a run never stops between a
 learner's ``act`` and ``learn``; outside the training loop (``somarm reproduce``, the writing of a
@@ -22,6 +24,9 @@ __all__ = ["stop_between_steps", "sigterm_as_interrupt", "signals_deferred", "st
            "end_with_parent", "cut_short_by_signals"]
 
 T = TypeVar("T")
+
+#: The signals that stop a run: Ctrl-C, SIGTERM, and SIGHUP (the terminal it ran in was closed).
+_STOPPING = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class _Cut(BaseException):
@@ -105,13 +110,15 @@ def cut_short_by_signals(work: Callable[[], T]) -> tuple[T | None, int]:
 
 
 def sigterm_as_interrupt() -> None:
-    """From now on SIGTERM raises ``KeyboardInterrupt`` like Ctrl-C (main thread only)."""
+    """From now on SIGTERM and SIGHUP raise ``KeyboardInterrupt`` like Ctrl-C (main thread only)."""
 
     def handler(signum, frame):
         raise KeyboardInterrupt
 
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, handler)
+        if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:  # under nohup it stays ignored
+            signal.signal(signal.SIGHUP, handler)
 
 
 def start_deaf_to_ctrl_c(process) -> None:
@@ -142,8 +149,8 @@ def end_with_parent(parent: int) -> None:
 
 @contextlib.contextmanager
 def _handled_by(handler) -> Iterator[None]:
-    """Inside, SIGINT and SIGTERM go to ``handler``; signals being ignored stay ignored; restored after."""
-    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    """Inside, SIGINT, SIGTERM and SIGHUP go to ``handler``; signals being ignored stay ignored; restored after."""
+    previous = {sig: signal.getsignal(sig) for sig in _STOPPING}
     for sig, old in previous.items():
         if old is not signal.SIG_IGN:
             signal.signal(sig, handler)

@@ -3,21 +3,19 @@
 A ``gym:ID`` task whose id reads ``MODULE:ID`` makes Gymnasium import ``MODULE`` before it looks the
 id up, so such a name runs whatever that module holds. The command line and a Python caller may
 give it (the user chose the module); a name read from a file (a run folder's ``config.json``) is
-held to what loading allows: somarm's own tasks, ``gym:ID`` of an id without a module part, and
-``dmc:DOMAIN-TASK``. The check reads the name alone, before anything is imported.
+held to what loading allows: somarm's own tasks, ``gym:ID`` of an id without a module part (found
+only among the registered ids), and ``dmc:DOMAIN-TASK``. The check reads the name alone, before
+anything is imported; a name it lets through that names nothing is then refused as on the command line.
 """
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 __all__ = ["check_loadable"]
 
-#: A Gymnasium id without a module part: ``[NAMESPACE/]NAME[-vN]`` (letters, digits, ``_.-``).
-_GYM_ID = re.compile(r"gym:(?:[A-Za-z0-9_.\-]+/)?[A-Za-z0-9_.\-]+")
-#: A DeepMind Control Suite task: ``dmc:DOMAIN-TASK``.
-_DMC_NAME = re.compile(r"dmc:[a-z0-9_]+-[a-z0-9_]+")
+#: The prefixes of the task names built on Gymnasium (``somarm.tasks.gym_envs``).
+_PREFIXES = ("gym:", "dmc:")
 #: Longer than any task name: a longer one is shown cut.
 _SHOWN = 60
 
@@ -30,17 +28,15 @@ def check_loadable(name: Any, *, where: str) -> str:
       where: the file, for the message.
 
     Raises:
-      ValueError: one line naming the file, the name and what a file may name.
+      ValueError: a name that is not text, or one with a module part (``gym:MODULE:ID``): one line
+        naming the file, the name and what a file may name.
     """
-    if isinstance(name, str) and (_GYM_ID.fullmatch(name) or _DMC_NAME.fullmatch(name)):
-        return name
-    if isinstance(name, str) and not name.startswith(("gym:", "dmc:")) and re.fullmatch(r"[a-z0-9_]+", name):
-        from somarm import tasks  # somarm's own task modules: registered names only
-
-        if name in tasks.names():
+    if isinstance(name, str):
+        rest = name[4:] if name.startswith(_PREFIXES) else name
+        if ":" not in rest and "\n" not in rest:
             return name
     shown = repr(name) if len(repr(name)) <= _SHOWN else repr(name)[:_SHOWN] + "..."
     why = (" (a gym:MODULE:ID name imports MODULE: give it on the command line or in code, never in a file)"
-           if isinstance(name, str) and name.startswith("gym:") and ":" in name[4:] else "")
+           if isinstance(name, str) and ":" in name[4:] else "")
     raise ValueError(f"{where} names task {shown}, which a file may not name{why}; a file names one of somarm's "
                      "tasks (somarm tasks lists them), gym:ID of a registered Gymnasium id, or dmc:DOMAIN-TASK")
