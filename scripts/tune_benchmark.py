@@ -35,6 +35,8 @@ def main() -> None:
     parser.add_argument("--rungs", default="", help="comma-separated sample counts scored on the way")
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--response", default=None, help="winner or interpolated (default: the preset's)")
+    parser.add_argument("--task-set", action="append", default=[], metavar="KEY=JSON",
+                        help="a task parameter over the preset's own (observation_ranges={\"6\": [-5, 5]})")
     args = parser.parse_args()
     record = tasks.record(args.task)
     samples = args.samples or record.n_steps
@@ -47,7 +49,9 @@ def main() -> None:
         if not 100 <= seed <= 199:
             raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
         # The observation scaling estimated at the seed, the task of the seed, fresh episodes of the seed.
-        params = record.complete(tasks.check_params(args.task, {}), seed)
+        task_params = {**presets.task_params_of(record.preset, args.task),
+                       **{key: json.loads(value) for key, value in (item.split("=", 1) for item in args.task_set)}}
+        params = record.complete(tasks.check_params(args.task, task_params), seed)
         task, judge = tasks.make(args.task, seed=seed, **params), tasks.make(args.task, seed=seed, **params)
         starts = judge.sample_starts(evaluation_rng(seed), args.episodes)
         learner = make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
@@ -61,7 +65,7 @@ def main() -> None:
             done = rung
             returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
             scores[rung] = (round(float(returns.mean()), 2), round(wall, 1))
-        print(json.dumps({"seed": seed, "set": overrides, "scores": scores}), flush=True)
+        print(json.dumps({"seed": seed, "set": overrides, "task_set": args.task_set, "scores": scores}), flush=True)
 
 
 if __name__ == "__main__":

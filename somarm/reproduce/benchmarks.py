@@ -2,8 +2,7 @@
 (``--only benchmarks``).
 
 Not part of the default reproduction: TD3 and SAC train for the RL Baselines3 Zoo's budgets (up to
-300,000 gradient steps per seed, at tens of milliseconds each on one core), so the part takes many
-hours. Every seed of every learner is kept as it finishes (``seeds/`` in each comparison's folder):
+300,000 gradient steps per seed), so the part takes many hours. Every seed of every learner is kept as it finishes (``seeds/`` in each comparison's folder):
 ``reproduce --only benchmarks --resume`` goes on where a stopped run ended. Every learner runs
 through ``somarm.peers.compare`` on the same seeds, scored by the mean undiscounted return of its
 greedy policy over the same fresh episodes.

@@ -8,7 +8,8 @@ does), or from the input units SOM-Q itself learned: the nearest one, as the pap
 sees the state, or a blend over the nearest few, as the interpolated response does; or from maps of
 400 to 10,000 units learned on the controller's own states, the best case for a map of that size; or,
 for Reacher-v5, as SOM-Q itself learns to hold the controller through each input representation
-(``REPRESENTATIONS``: one map, maps over pairs of dimensions whose Q-values add, k nearest units, growing maps).
+(``REPRESENTATIONS``: one map, maps over pairs of dimensions whose Q-values add, k nearest units, growing maps,
+local linear units, Q adding over the torque grid's axes).
 Every number is a mean undiscounted return over fresh episodes of the environment itself.
 
 The controllers are this project's:
@@ -219,6 +220,10 @@ REPRESENTATIONS = (
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3}),
     ("45 pair maps growing to 10x10 (a row or column every 1,000 steps), their 3 nearest units",
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "grow_every": 1000}),
+    ("45 pair maps of 10x10, their 3 nearest units, Q adding over the torque grid's axes (action_factored)",
+     {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "action_factored": True}),
+    ("45 pair maps of 5x5, their 3 nearest units, local linear units (local_linear), action_factored",
+     {"input_groups": "pairs", "input_shape": (5, 5), "k_nearest": 3, "local_linear": True, "action_factored": True}),
 )
 
 
@@ -320,7 +325,8 @@ def inverted_pendulum(episodes: int, seed: int, map_steps: int | None = 0) -> li
     def linear(obs: np.ndarray) -> np.ndarray:
         return np.array([INVERTED_PENDULUM_GAINS @ obs])
 
-    low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed))
+    how = presets.task_params_of("invertedpendulum", "gym:" + env_id)
+    low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), seed, how=how))
     config = presets.get("invertedpendulum")
     preset = _levels(config.action_shape, env_id, config.grid_span)
     whole, narrow = _levels((3,), env_id), _levels((3,), env_id, 1.0 / 6.0)
