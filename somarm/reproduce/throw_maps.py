@@ -114,8 +114,6 @@ def _claims(measured: dict[int, dict]) -> list[Claim]:
 
 def _trial_row(axes, learner, i: int, targets: np.ndarray, landed: np.ndarray, miss: float) -> None:
     """One trial's input map, action map over the X = 4.5 curve, and greedy landing against target."""
-    from matplotlib.lines import Line2D
-
     greedy = learner.q[i].argmax(axis=1)
     n_actions = learner.q.shape[2]
     plots.draw_input_map(axes[0], learner.input_weights[i] / 9.0, greedy, n_actions,
@@ -126,8 +124,8 @@ def _trial_row(axes, learner, i: int, targets: np.ndarray, landed: np.ndarray, m
     unit_square(axes[1])
     axes[1].set_title("action map (shaded by index)", fontsize=9)
     # The map's own lines carry no label (plots.draw_action_map): named here by stand-ins of their style.
-    chain = Line2D([], [], color="0.6", lw=0.7, label="neighbouring action units")
-    unit = Line2D([], [], ls="none", marker="o", markerfacecolor="0.7", markeredgecolor="k", label="action unit")
+    chain = plt.Line2D([], [], color="0.6", lw=0.7, label="neighbouring action units")
+    unit = plt.Line2D([], [], ls="none", marker="o", markerfacecolor="0.7", markeredgecolor="k", label="action unit")
     axes[1].legend(handles=[*axes[1].get_legend_handles_labels()[0], chain, unit], fontsize=7,
                    **{**legend_below(ncol=3), "bbox_to_anchor": (0.5, -0.2)})  # below the u_x label
     index = np.arange(len(targets))
