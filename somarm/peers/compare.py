@@ -287,6 +287,7 @@ def make_plan(config: CompareConfig) -> Plan:
       ValueError: an unknown task or learner, bad counts, a learner that cannot take the task
         (tabular on reach20), or TD3/SAC without the ``peers`` extra.
     """
+    from somarm.learners import presets
     from somarm.validation import check_int
 
     for name in ("samples", "seeds", "observations"):
@@ -307,7 +308,9 @@ def make_plan(config: CompareConfig) -> Plan:
                          f"{', '.join(one_step)}")
     if any(k in PEERS for k in config.learners) and (reason := peers_missing()):
         raise ValueError(reason)
-    params = json.loads(_completed(config.task, json.dumps(config.task_params, sort_keys=True), config.seed))
+    preset_params = presets.task_params_of(record.preset, config.task) if record.preset else {}
+    params = json.loads(_completed(config.task, json.dumps({**preset_params, **config.task_params}, sort_keys=True),
+                                   config.seed))
     gym_id = gym_envs.env_id_of(config.task) if gym_envs.env_task(config.task) else None
     runners: dict[str, Runner] = {}
     task = tasks.make(config.task, seed=config.seed, **params)

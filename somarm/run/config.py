@@ -122,7 +122,9 @@ class RunConfig:
             learner_config=base.with_changes(self.overrides),
             n_steps=self.n_steps if self.n_steps is not None else record.n_steps,
             overrides=dict(self.overrides),
-            task_params=record.complete(tasks.check_params(self.task, self.task_params), self.seed),
+            task_params=record.complete(tasks.check_params(
+                self.task, {**(presets.task_params_of(preset, self.task) if preset else {}), **self.task_params}),
+                self.seed),
             backend=backend,
         )
         # Named by their somarm train flags: that is where a user meets them.

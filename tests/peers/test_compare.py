@@ -310,11 +310,13 @@ def test_the_yardsticks_see_the_state_through_the_presets_learned_input_map():
 
 
 def test_a_map_learned_on_the_controllers_states_gathers_round_them_and_is_reproducible():
+    from somarm.learners import presets
     from somarm.reproduce import yardsticks
     from somarm.tasks import gym_envs
 
     env_id = "InvertedPendulum-v5"
-    low, high = (np.array(b) for b in gym_envs.estimate_bounds(gym_envs.GymParams(env_id), 0))
+    low, high = (np.array(b) for b in gym_envs.estimate_bounds(
+        gym_envs.GymParams(env_id), 0, how=presets.task_params_of("invertedpendulum", "gym:" + env_id)))
     scaling = gym_envs.BoxScaling(low, high)
     assert np.allclose(scaling.unscale(scaling.scale(np.array([0.3, -0.1, 1.0, -2.0]))), [0.3, -0.1, 1.0, -2.0])
 
