@@ -88,7 +88,7 @@ def test_the_peers_part_is_optional_and_runs_when_named(tmp_path):
     assert report.count("\n| SB3 TD3 | ") == 3  # a time-to-error row per task
     for task in ("reach2", "reach20", "throw_distance"):
         assert (tmp_path / "peers" / task / "compare.png").stat().st_size > 10_000
-        assert f"![compare](peers/{task}/compare.png)" in report
+        assert f"](peers/{task}/compare.png)" in report
 
 
 def test_compare_scores_a_gymnasium_environment_by_greedy_returns_with_the_zoos_settings(tmp_path):
