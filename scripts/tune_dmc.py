@@ -1,0 +1,125 @@
+"""Score SOM-Q settings on a suite task's tuning seeds (100-199), as the dmc part scores them.
+
+One trial per seed: the task's preset (or ``--preset``) changed by ``--set KEY=VALUE``, the task by
+``--task-set KEY=JSON`` (``observation_low=[...]``: the scaling bounds), trained for ``--samples`` and
+scored at each rung of ``--rungs`` by the mean undiscounted greedy return over ``--episodes`` fresh
+episodes of the seed (the reset seeds of the seed's evaluation stream; the observation scaling estimated
+at the seed where not given). Prints one JSON line per seed and appends it to ``--record`` (a JSON-lines
+file, e.g. docs/benchmarks/dmc/tuning.jsonl). For choosing settings on seeds 100-199 only.
+
+    python scripts/tune_dmc.py dmc:cartpole-balance --seeds 100,101 --set gamma=0.99 \\
+        --task-set 'observation_low=[-2,-1,-1,-2,-5]' --task-set 'observation_high=[2,1,1,2,5]'
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from somarm import tasks
+from somarm.learners import make, presets
+from somarm.run.evaluation import episode_starts
+
+
+def _train(task, learner, steps: int) -> None:
+    """``steps`` steps of one trial on an episodic task (as ``somarm compare`` trains)."""
+    for _ in range(steps):
+        actions = learner.act(task.reset())
+        learner.learn(task.step(actions), task.next_observations, task.terminal)
+
+
+def _register_repeat(name: str, k: int) -> str:
+    """Suite task ``name`` with every action held for ``k`` of the suite's control steps (their rewards
+    summed), registered as ``tune-dmc/DOMAIN-TASK-rK-v0`` in this process; its ``gym:`` name."""
+    import gymnasium
+
+    from somarm.tasks.dmc import SuiteEnv, split_name
+
+    domain, task = split_name(name)
+
+    class Repeat(gymnasium.Wrapper):
+        def step(self, action):
+            total = 0.0
+            for _ in range(k):
+                observation, reward, terminated, truncated, info = self.env.step(action)
+                total += reward
+                if terminated or truncated:
+                    break
+            return observation, total, terminated, truncated, info
+
+    env_id = f"tune-dmc/{domain}-{task}-r{k}-v0"
+    gymnasium.register(env_id, entry_point=lambda: Repeat(SuiteEnv(domain, task)), disable_env_checker=True)
+    return "gym:" + env_id
+
+
+def _task_set(items: list[str]) -> dict:
+    out = {}
+    for item in items:
+        key, _, text = item.partition("=")
+        try:
+            out[key] = json.loads(text)
+        except json.JSONDecodeError:
+            out[key] = text
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("task")
+    parser.add_argument("--seeds", default="100", help="comma-separated tuning seeds (100-199)")
+    parser.add_argument("--preset", default=None, help="the preset to start from (default: the task's)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--task-set", action="append", default=[], metavar="KEY=JSON")
+    parser.add_argument("--train-task-set", action="append", default=[], metavar="KEY=JSON",
+                        help="set for the training task only (time_limit=2: shorter training episodes)")
+    parser.add_argument("--samples", type=int, default=None, help="default: the task's run length")
+    parser.add_argument("--rungs", default="", help="comma-separated sample counts scored on the way")
+    parser.add_argument("--episodes", type=int, default=10)
+    parser.add_argument("--record", default=None, help="a JSON-lines file each seed's row is appended to")
+    parser.add_argument("--note", default="", help="a word on what the row tries")
+    parser.add_argument("--action-repeat", type=int, default=1, help="hold each action for K control steps")
+    args = parser.parse_args()
+    name = args.task if args.action_repeat == 1 else _register_repeat(args.task, args.action_repeat)
+    record = tasks.record(name)
+    samples = args.samples or record.n_steps
+    rungs = sorted({int(r) for r in args.rungs.split(",") if r} | {samples})
+    overrides = dict(item.split("=", 1) for item in args.set)
+    preset = args.preset or tasks.record(args.task).preset
+    settings = presets.get(preset).with_overrides(overrides)
+    given = _task_set(args.task_set)
+    for seed in (int(s) for s in args.seeds.split(",")):
+        if not 100 <= seed <= 199:
+            raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
+        params = record.complete(tasks.check_params(name, dict(given)), seed)
+        train_params = {**params, **_task_set(args.train_task_set)}
+        task, judge = tasks.make(name, seed=seed, **train_params), tasks.make(name, seed=seed, **params)
+        starts = episode_starts(judge, args.episodes, seed)
+        learner = make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
+                       action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic,
+                       seed=seed)
+        done, wall, scores = 0, 0.0, {}
+        for rung in rungs:
+            start = time.perf_counter()
+            _train(task, learner, rung - done)
+            wall += time.perf_counter() - start
+            done = rung
+            returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
+            scores[rung] = round(float(returns.mean()), 1)
+        row = {"task": args.task, "seed": seed, "steps": samples, "preset": preset,
+               "settings": [f"{k}={v}" for k, v in overrides.items()],
+               "task_settings": [f"{k}={json.dumps(v)}" for k, v in given.items()],
+               "train_task_settings": args.train_task_set,
+               "action_repeat": args.action_repeat, "greedy": scores[samples], "rungs": scores, "episodes": args.episodes, "train_s": round(wall, 1),
+               "note": args.note}
+        print(json.dumps(row), flush=True)
+        if args.record:
+            with Path(args.record).open("a") as f:
+                f.write(json.dumps(row) + "\n")
+        task.close()
+        judge.close()
+
+
+if __name__ == "__main__":
+    main()
