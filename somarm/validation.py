@@ -21,6 +21,7 @@ __all__ = [
     "check_array",
     "check_bounds",
     "check_periodic",
+    "check_observation_box",
     "check_memory",
     "real_array",
 ]
@@ -242,3 +243,20 @@ def check_periodic(value: object, size: int) -> np.ndarray:
     if array.shape != (size,) or array.dtype != np.bool_:
         raise ValueError(f"action_periodic must be {size} booleans (one per action dimension), got {value!r:.60}")
     return array.copy()
+
+
+def check_observation_box(task: str, low: np.ndarray, high: np.ndarray) -> None:
+    """Refuse an observation Box with a flat dimension (``low == high``): a value that never changes says
+    nothing, and scaling it onto ``[0, 1]`` divides by zero (the non-finite observations it would give
+    are not the environment's). Infinite bounds pass (they are estimated).
+
+    Raises:
+      ValueError: one line naming the task and the flat dimensions.
+    """
+    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+    flat = [int(k) for k in np.flatnonzero(np.isfinite(low) & (low == high))]
+    if flat:
+        shown = ", ".join(f"{low[k]:g}" for k in flat[:4])
+        raise ValueError(f"{task}'s observation Box has low == high in dimension(s) {flat} ({shown}): such a "
+                         "dimension never changes and cannot be scaled; wrap the environment to drop it "
+                         "(gymnasium.wrappers), or give an environment whose every dimension varies")

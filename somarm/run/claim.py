@@ -231,7 +231,15 @@ def claim(folder: Path, *, force: bool = False, resume: bool = False, flag: str 
       ValueError: the folder cannot be made or written, is a file, another process holds it, or it
         holds files and ``force`` is false (one line naming the folder and what to do).
     """
-    if folder.exists() and not folder.is_dir():
+    try:
+        os.lstat(folder)
+        exists = True
+    except FileNotFoundError:
+        exists = False
+    except OSError as exc:  # a name too long for the file system, a loop of links
+        shown = str(folder) if len(str(folder)) <= 80 else str(folder)[:77] + "..."
+        raise ValueError(f"{flag} {shown} cannot be used: {exc.strerror or exc}; give a shorter folder name") from None
+    if exists and not folder.is_dir():
         raise ValueError(f"{flag} {folder} is a file; give a folder (new, or holding {what})")
     created = not folder.exists()
     had_lock = os.path.lexists(folder / LOCK_NAME)

@@ -25,7 +25,7 @@ from somarm.streams import trial_ids_for
 from somarm.tasks.record import BACKENDS
 from somarm.validation import check_int, whole_number
 
-__all__ = ["RunConfig", "add_options", "from_options", "parse_assignments"]
+__all__ = ["RunConfig", "add_options", "from_options", "parse_assignments", "parse_task_params"]
 
 
 def _option(flag: str | None, help: str = "", **argparse_kwargs: Any) -> dict[str, Any]:
@@ -183,7 +183,6 @@ class RunConfig:
         Raises:
           ValueError: a missing, unknown or mistyped setting (one line naming it).
         """
-        from somarm import tasks
         from somarm.learners.settings import parse_settings
 
         names = {f.name for f in dataclasses.fields(cls)}
@@ -200,12 +199,24 @@ class RunConfig:
         values = dict(data)
         config_type = _config_class(values.get("learner", "somq"))
         values["overrides"] = parse_settings(config_type, {k: _text(v) for k, v in data.get("overrides", {}).items()})
-        values["task_params"] = tasks.parse_params(data["task"], data.get("task_params", {}))
+        values["task_params"] = parse_task_params(data["task"], data.get("task_params", {}), "task_params")
         if values.get("learner_config") is not None:
             if not isinstance(values["learner_config"], dict):
                 raise ValueError("run setting 'learner_config' must be a JSON object of the learner's fields")
             values["learner_config"] = config_type.from_dict(values["learner_config"])
         return cls(**values)
+
+
+def parse_task_params(task: str, texts: dict[str, Any], what: str) -> dict[str, Any]:
+    """``tasks.parse_params``, with a value nested deeper than any task parameter refused in one line."""
+    from somarm import tasks
+
+    try:
+        return tasks.parse_params(task, texts)
+    except RecursionError:
+        deep = next((k for k, v in texts.items() if isinstance(v, str) and v.lstrip()[:1] in "[{"), "?")
+        raise ValueError(f"{what} {deep}: the value is nested too deeply to be a task parameter; give a number, "
+                         "a word or a short list") from None
 
 
 def _config_class(kind: str) -> type:
@@ -285,7 +296,7 @@ def from_options(args: argparse.Namespace) -> RunConfig:
               if f.metadata["flag"] and hasattr(args, f.name)}
     tasks.record(args.task)  # an unknown task is named before its parameters
     values["overrides"] = parse_settings(_config_class(args.learner), parse_assignments(args.overrides, "--set"))
-    values["task_params"] = tasks.parse_params(args.task, parse_assignments(args.task_params, "--task-set"))
+    values["task_params"] = parse_task_params(args.task, parse_assignments(args.task_params, "--task-set"), "--task-set")
     trials, ids = args.n_trials, getattr(args, "trial_ids", None)
     if ids and trials is not None and trials != len(ids):
         raise ValueError(f"--trials {trials} disagrees with {len(ids)} --trial-ids; give one of them")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 from pathlib import Path
 from typing import Literal
 
@@ -77,7 +78,7 @@ def run_sweep(
     folder = Path(out)
     described = {**spec.to_dict(), "points": points}
     same = _holds(folder, described)
-    if not same and not force and (folder / "sweep.json").is_file():
+    if not same and not force and os.path.isfile(folder / "sweep.json"):
         raise ValueError(f"--out {folder} holds another sweep (its settings or swept keys differ); give --force to "
                          "replace it, or another --out (the same sweep, or one with more values or seeds, goes on "
                          "where it stopped)")

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from somarm.run.config import RunConfig
+from somarm.run.config import RunConfig, parse_task_params
 from somarm.validation import check_int, parse_float
 
 __all__ = ["TASK_PREFIX", "Axis", "SweepSpec", "parse_grid", "parse_random", "preset_value", "same_value", "config_key"]
@@ -193,13 +193,13 @@ class SweepSpec:
         Raises:
           ValueError: an unknown key or a bad value (one line, as ``somarm train`` gives it).
         """
-        from somarm import learners, tasks
+        from somarm import learners
         from somarm.learners.settings import parse_settings
 
         overrides = parse_settings(learners.config_class(self.learner),
                                    {k: v for k, v in point.items() if not k.startswith(TASK_PREFIX)})
-        task_params = tasks.parse_params(self.task, {k[len(TASK_PREFIX):]: v for k, v in point.items()
-                                                     if k.startswith(TASK_PREFIX)})
+        task_params = parse_task_params(self.task, {k[len(TASK_PREFIX):]: v for k, v in point.items()
+                                                    if k.startswith(TASK_PREFIX)}, "--grid task.KEY")
         base = self.base_config(seed)
         return dataclasses.replace(
             base, overrides={**base.overrides, **overrides}, task_params={**base.task_params, **task_params}

@@ -73,7 +73,9 @@ def validate_points(spec: SweepSpec, points: list[dict[str, str]]) -> None:
                 run.make_task(config)
                 tasks_checked.add(task_key)
         except ValueError as exc:
-            raise ValueError(f"sweep point {point_label(point)}: {exc}") from None
+            label = point_label(point)
+            label = label if len(label) <= 120 else label[:117] + "..."
+            raise ValueError(f"sweep point {label}: {exc}") from None
 
 
 def _bytes_per_point(config: RunConfig) -> float:
