@@ -124,3 +124,26 @@ def test_train_force_replaces_a_planted_link_and_leaves_its_target(tmp_path, pla
     assert victim.read_text() == "the user's own file\n" and not (out / planted).is_symlink()
 
 
+
+
+def test_a_report_whose_figures_folder_is_a_link_is_refused_and_writes_nothing_there(tmp_path):
+    from somarm.reproduce import runner
+
+    out = tmp_path / "report"
+    out.mkdir()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (out / "figures").symlink_to(elsewhere)
+    with pytest.raises(ValueError, match="figures is a symbolic link"):
+        runner.reproduce(out, quick=True, only=["reach2"], progress=False)
+    assert list(elsewhere.iterdir()) == []
+
+
+def test_a_resumed_folder_holding_a_link_to_a_folder_is_refused_in_one_line(tmp_path):
+    out = tmp_path / "cmp"
+    assert somarm(*COMPARE, "--out", str(out)).returncode == 0
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (out / "seeds" / "more").symlink_to(elsewhere)
+    one_error_line(somarm(*COMPARE, "--out", str(out)), str(out / "seeds" / "more"), "symbolic link to a folder")
+    assert list(elsewhere.iterdir()) == []

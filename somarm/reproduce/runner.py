@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from somarm import __version__
-from somarm.io import atomic_write_json, atomic_write_text
+from somarm.io import atomic_write_json, atomic_write_text, make_folder
 from somarm.peers.compare import peers_missing
 from somarm.reproduce import (
     against_peers,
@@ -124,7 +124,7 @@ def reproduce(
       ValueError: before anything is written: an unknown experiment or backend, seeds < 1 or more than fit in memory.
     """
     names = check_request(only, quick=quick, seed=seed, seeds=seeds, jobs=jobs, backend=backend)
-    (out / "figures").mkdir(parents=True, exist_ok=True)
+    make_folder(out / "figures", within=out)  # a link planted there is refused, never written through
     all_seeds = tuple(range(seed, seed + seeds))
     settings = {"quick": quick, "seeds": list(all_seeds), "backend": backend}
     sections: list[Section] = []
