@@ -3,10 +3,9 @@
 The configs of a group are independent (each trial draws from its own seeds; the shared physics
 call is only a saving), so a group can be cut into shares trained side by side: the first share
 in this process, each other in a worker process started fresh (``spawn``). Processes, unlike threads,
-do not share Python's GIL: measured on 2 cores, Fig. 25's
-four 100-trial experiments train about 1.3x faster in two processes than in one (2000 steps, the
-worker's start-up of about 3 s included). Each result
-equals the config's result in one group, and a run alone.
+do not share Python's GIL, so the shares train side by side on separate cores; a worker's start-up
+is the price, so only a group long enough to repay it is worth cutting. Each result equals the
+config's result in one group, and a run alone.
 
 A worker starts with Ctrl-C ignored, so Ctrl-C reaches this process alone: its own share stops
 between two steps, and it sends every worker SIGTERM, which stops the worker's share the same way;

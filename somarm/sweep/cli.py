@@ -40,6 +40,7 @@ def main(args: argparse.Namespace) -> int:
       ValueError: a bad option, spec or point (one line), before anything runs.
     """
     from somarm import run
+    from somarm.run.names import folder_part
     from somarm.run.stopping import sigterm_as_interrupt
     from somarm.sweep import SweepSpec, parse_grid, parse_random, run_sweep
     from somarm.validation import check_int, check_number
@@ -50,7 +51,7 @@ def main(args: argparse.Namespace) -> int:
     axes = tuple(parse_grid(g) for g in args.grid) + tuple(parse_random(r) for r in args.random)
     spec = SweepSpec.around(run.from_options(args), axes, n_seeds=args.seeds, n_samples=args.samples,
                             sample_seed=args.sample_seed)
-    out = args.out or f"sweeps/{spec.task}"
+    out = args.out or f"sweeps/{folder_part(spec.task)}"
     sigterm_as_interrupt()
     outcome = run_sweep(spec, out, engine=args.engine, workers=args.workers, address=args.address,
                         max_group_bytes=args.max_group_mb * 1e6, progress=not args.no_progress,
