@@ -29,17 +29,18 @@ COMPARE = ("compare", "throw_distance", "--learners", "tabular", "--samples", "2
            "--observations", "10", "--no-progress", "--resume")
 
 
-@pytest.mark.parametrize("planted", ["seeds/tabular-0.json", "compare.json", "compare.png"])
-def test_a_resumed_comparison_replaces_a_planted_link_and_leaves_its_target(tmp_path, planted):
+def test_a_resumed_comparison_replaces_planted_links_and_leaves_their_targets(tmp_path):
     out = tmp_path / "cmp"
     assert somarm(*COMPARE, "--out", str(out)).returncode == 0
-    victim = _victim(tmp_path)
-    (out / planted).unlink()
-    (out / planted).symlink_to(victim)
+    planted = [out / name for name in ("seeds/tabular-0.json", "compare.json", "compare.png")]
+    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
+    for link, victim in zip(planted, victims, strict=True):
+        link.unlink()
+        link.symlink_to(victim)
     done = somarm(*COMPARE, "--out", str(out))
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
-    assert victim.read_text() == "the user's own file\n"
-    assert not (out / planted).is_symlink() and (out / planted).stat().st_size > 0
+    assert all(victim.read_text() == "the user's own file\n" for victim in victims)
+    assert all(not link.is_symlink() and link.stat().st_size > 0 for link in planted)
     assert json.loads((out / "compare.json").read_text())["complete"]
 
 
@@ -56,19 +57,27 @@ def test_a_comparison_whose_seeds_folder_is_a_link_is_refused_and_writes_nothing
 SWEEP = ("sweep", "reach2", "--grid", "alpha=0.1,0.2", "--steps", "100", "--no-progress", "--no-figures")
 
 
-@pytest.mark.parametrize("planted", ["results.csv", "best.json", "sweep.json"])
-def test_a_sweep_run_again_replaces_a_planted_link_and_leaves_its_target(tmp_path, planted):
+def test_a_sweep_run_again_replaces_planted_links_and_leaves_their_targets(tmp_path):
+    out = tmp_path / "sweep"
+    assert somarm(*SWEEP, "--out", str(out)).returncode == 0
+    planted = [out / "results.csv", out / "best.json"]
+    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
+    for link, victim in zip(planted, victims, strict=True):
+        link.unlink()
+        link.symlink_to(victim)
+    done = somarm(*SWEEP, "--out", str(out))
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert all(victim.read_text() == "the user's own file\n" for victim in victims)
+    assert not any(link.is_symlink() for link in planted)
+
+
+def test_a_sweep_json_that_is_a_link_is_refused_as_another_sweep_and_its_target_left(tmp_path):
     out = tmp_path / "sweep"
     assert somarm(*SWEEP, "--out", str(out)).returncode == 0
     victim = _victim(tmp_path)
-    (out / planted).unlink()
-    (out / planted).symlink_to(victim)
-    done = somarm(*SWEEP, "--out", str(out))
-    assert "Traceback" not in done.stderr, done.stderr
-    if done.returncode:  # a sweep.json that is not this sweep's: refused, as another sweep's is
-        one_error_line(done, "holds another sweep")
-    else:
-        assert not (out / planted).is_symlink()
+    (out / "sweep.json").unlink()
+    (out / "sweep.json").symlink_to(victim)
+    one_error_line(somarm(*SWEEP, "--out", str(out)), "holds another sweep")
     assert victim.read_text() == "the user's own file\n"
 
 
@@ -112,18 +121,18 @@ def test_a_link_at_a_run_folders_staging_is_removed_and_its_target_left(tmp_path
     assert victim.read_text() == "the user's own file\n" and (out / "learner.npz").stat().st_size > 1000
 
 
-@pytest.mark.parametrize("planted", ["learner.npz", "config.json", "summary.json"])
-def test_train_force_replaces_a_planted_link_and_leaves_its_target(tmp_path, planted):
+def test_train_force_replaces_planted_links_and_leaves_their_targets(tmp_path):
     out = tmp_path / "run"
     assert somarm(*TRAIN, "--out", str(out)).returncode == 0
-    victim = _victim(tmp_path)
-    (out / planted).unlink()
-    (out / planted).symlink_to(victim)
+    planted = [out / name for name in ("learner.npz", "config.json", "summary.json")]
+    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
+    for link, victim in zip(planted, victims, strict=True):
+        link.unlink()
+        link.symlink_to(victim)
     done = somarm(*TRAIN, "--force", "--out", str(out))
     assert done.returncode == 0, done.stderr
-    assert victim.read_text() == "the user's own file\n" and not (out / planted).is_symlink()
-
-
+    assert all(victim.read_text() == "the user's own file\n" for victim in victims)
+    assert not any(link.is_symlink() for link in planted)
 
 
 def test_a_report_whose_figures_folder_is_a_link_is_refused_and_writes_nothing_there(tmp_path):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import subprocess
 
+import numpy as np
 import pytest
 from processes import checkout_env, somarm_command
 
@@ -31,19 +32,28 @@ def _damage(record: dict, how: str) -> str:
     return json.dumps(record)
 
 
-@pytest.mark.parametrize("how", ["wrong shape", "text", "nan", "deep", "a list"])
-def test_a_damaged_seed_record_is_named_and_its_seed_trained_again(tmp_path, how):
+HOW = ["wrong shape", "text", "nan", "deep", "a list"]
+
+
+def test_a_damaged_seed_record_is_named_and_its_seed_trained_again(tmp_path):
     out = tmp_path / "cmp"
-    assert somarm(*COMPARE, "--out", str(out)).returncode == 0
-    path = out / "seeds" / "tabular-0.json"
-    good = json.loads(path.read_text())
-    path.write_text(_damage(dict(good), how))
-    done = somarm(*COMPARE, "--out", str(out))
+    argv = [*COMPARE, "--out", str(out)]
+    argv[argv.index("--seeds") + 1] = str(len(HOW))
+    assert somarm(*argv).returncode == 0
+    good = {}
+    for seed, how in enumerate(HOW):  # each seed's record damaged its own way
+        path = out / "seeds" / f"tabular-{seed}.json"
+        good[path] = json.loads(path.read_text())
+        path.write_text(_damage(dict(good[path]), how))
+    done = somarm(*argv)
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
-    assert done.stderr.strip().splitlines() == [
-        line for line in done.stderr.strip().splitlines() if line.startswith(f"{path} is damaged: ")]
-    assert len(done.stderr.strip().splitlines()) == 1 and "training that seed again" in done.stderr
-    again = json.loads(path.read_text(), parse_constant=pytest.fail)
-    assert again["values"] == good["values"]  # trained again from the same seed: the same scores
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == len(HOW)  # one line each, naming its file
+    for line, path in zip(lines, good, strict=True):
+        assert line.startswith(f"{path} is damaged: ") and line.endswith("; training that seed again"), line
+    for path, record in good.items():
+        again = json.loads(path.read_text(), parse_constant=pytest.fail)
+        assert again["values"] == record["values"]  # trained again from the same seed: the same scores
     result = json.loads((out / "compare.json").read_text(), parse_constant=pytest.fail)
-    assert result["complete"] and [row[0] for row in result["learners"]["tabular"]["error"]] == good["values"]
+    assert result["complete"] and np.array(result["learners"]["tabular"]["error"]).T.tolist() == [
+        record["values"] for record in good.values()]

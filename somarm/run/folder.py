@@ -91,7 +91,8 @@ def write_claimed(result: RunResult, owner: FolderClaim, **kwargs: Any) -> None:
     owner.finish(not result.interrupted)
     if result.failed is not None:
         kept = (f"the earlier run in {owner.folder} is kept" if owner.replacing else
-                f"the {result.steps_done} steps before it are kept in {owner.folder}, marked failed in summary.json")
+                f"the {result.steps_done} steps before it are kept in {owner.folder}, marked failed in summary.json"
+                if result.steps_done else f"no step was trained; {owner.folder} holds the run marked failed")
         raise ValueError(f"{result.failed}; {kept}")
 
 
