@@ -42,7 +42,6 @@ Where it differs from SB3, and why:
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import time
 import warnings
@@ -55,6 +54,7 @@ import numpy as np
 
 from somarm import run, tasks
 from somarm.agent_env import bounds_of, task_name, task_on
+from somarm.io import read_json
 from somarm.protocols import BatchedTask, Learner
 from somarm.run import RunConfig
 from somarm.run.loop import EpisodeLog, Episodes, loop
@@ -515,7 +515,7 @@ class SOMQ:
                 means, squares = np.asarray(data["block_means"], float), np.asarray(data["block_sq_means"], float)
                 names = ("episode_ends", "episode_trials", "episode_returns", "episode_lengths")
                 episodes = Episodes(*(np.asarray(data[n]) for n in names)) if self.task.episodic else None
-            wall = float(json.loads((folder / "summary.json").read_text())["wall_time_s"])
+            wall = float(read_json(folder / "summary.json", max_bytes=2**20)["wall_time_s"])
         except (OSError, EOFError, KeyError, TypeError, ValueError, zipfile.BadZipFile, zlib.error) as exc:
             self._cannot_learn = (f"{folder} holds no readable curves.npz and summary.json ({exc}); "
                                   "a loaded model learns on only from a complete run folder")

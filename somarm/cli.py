@@ -300,10 +300,10 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_compare(args) -> int:
-    from somarm import cluster, tasks
+    from somarm import cluster
     from somarm.peers import compare
     from somarm.run.claim import claim
-    from somarm.run.config import parse_assignments
+    from somarm.run.config import parse_assignments, parse_task_params
     from somarm.run.names import folder_part
     from somarm.run.stopping import sigterm_as_interrupt
 
@@ -316,7 +316,7 @@ def _cmd_compare(args) -> int:
         seed=args.seed,
         observations=args.observations,
         episodes=args.episodes,
-        task_params=tasks.parse_params(args.task, parse_assignments(args.task_set, "--task-set")),
+        task_params=parse_task_params(args.task, parse_assignments(args.task_set, "--task-set"), "--task-set"),
     )
     plan = compare.make_plan(config)  # checked and resolved once, before the folder is claimed
     cluster.check_engine(args.engine, args.ray_address)
