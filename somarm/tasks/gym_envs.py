@@ -56,6 +56,7 @@ import numpy as np
 from somarm.streams import PURPOSES, trial_generators, trial_ids_for
 from somarm.tasks.base import TaskBase
 from somarm.tasks.record import TaskRecord
+from somarm.validation import check_observation_box
 
 __all__ = ["PREFIX", "DMC_PREFIX", "env_task", "suite_names", "env_id_of", "name_of", "make_env", "BoxScaling", "GymParams", "GymTask", "GymRecord", "record_for", "describe", "BENCHMARKS", "DMC_BENCHMARKS", "EVALUATION_STEPS",
            "estimate_bounds", "scaling_how"]
@@ -99,15 +100,6 @@ DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
     **{name: ("dmc", 100_000) for name in ("dmc:cartpole-balance", "dmc:cartpole-swingup", "dmc:pendulum-swingup")},
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:point_mass-easy")},
 }
-
-#: Until every caller passes ``observation_ranges`` and ``observation_widened`` from the preset
-#: (``somarm.learners.presets.task_params_of``), the invertedpendulum preset's, used where none are
-#: given; the learner side owns them (``Preset.task_params``), and these go once the callers pass them.
-_UNTIL_PASSED: dict[str, dict[str, dict[str, Any]]] = {
-    "InvertedPendulum-v5": {"observation_ranges": {"0": [-1.0, 1.0], "1": [-0.2, 0.2]},
-                            "observation_widened": {"0": 32.0, "2": 4.0, "3": 2.0}},
-}
-
 
 class BoxScaling:
     """``[low, high]`` onto ``[0, 1]`` per dimension and back: how a gym task's observations reach the
@@ -190,7 +182,9 @@ def _make(env_id: str, kwargs: dict[str, Any]):
         env_id = "somarm.peers.gym:" + env_id
     elif env_id.startswith(_DMC_NAMESPACE):
         env_id = "somarm.tasks.dmc:" + env_id
-    return gymnasium.make(env_id, **kwargs)
+    with warnings.catch_warnings():  # a flat Box is refused in one line (describe), not warned of as well
+        warnings.filterwarnings("ignore", message=".*A Box observation space maximum and minimum values are equal")
+        return gymnasium.make(env_id, **kwargs)
 
 
 def _gymnasium():
@@ -293,6 +287,7 @@ def _describe(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
         _first_step(env, (action_low + action_high) / 2.0)
         observation_low = np.asarray(env.observation_space.low, dtype=np.float64)
         observation_high = np.asarray(env.observation_space.high, dtype=np.float64)
+        check_observation_box(name, observation_low, observation_high)
         return {
             "observation_low": np.where(observation_low <= -_UNBOUNDED, -np.inf, observation_low),
             "observation_high": np.where(observation_high >= _UNBOUNDED, np.inf, observation_high),
@@ -430,8 +425,7 @@ def estimate_bounds(params: GymParams, seed: int, *, env: Any = None,
     given and widens the dimensions named. With ``env`` (an environment object, wrapped after
     ``gymnasium.make``), a copy of it is stepped and its own observation Box taken instead."""
     facts = describe(params.env_id, _kwargs_json(params))
-    ranges, widened = scaling_how(_UNTIL_PASSED.get(params.env_id, {}) if how is None else how,
-                                  facts["observation_low"].size, name_of(params.env_id))
+    ranges, widened = scaling_how(how or {}, facts["observation_low"].size, name_of(params.env_id))
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(PURPOSES["scaling"],))))
     if env is not None:
         facts = {**facts, **box_of(env.observation_space)}
@@ -721,9 +715,8 @@ class GymRecord(TaskRecord):
         say how to find them (then used up), so the run's ``config.json`` keeps the bounds. Bounds given
         are kept as they are."""
         built = self.params_from(params)
-        given = {key: params[key] for key in _HOW if key in params}
+        how = {key: params[key] for key in _HOW if key in params}
         rest = {key: value for key, value in params.items() if key not in _HOW}
-        how = given if given else _UNTIL_PASSED.get(built.env_id, {})
         facts = describe(built.env_id, _kwargs_json(built))
         finite = np.isfinite(facts["observation_low"]).all() and np.isfinite(facts["observation_high"]).all()
         if built.observation_low is not None or (finite and not any(how.values())):
