@@ -11,7 +11,9 @@ Gymnasium task, ``SOMQ`` and Stable-Baselines3 all step the suite's own physics:
 - ``reset(seed=s)`` reseeds the task's own random state (``task.random``) from ``s``, so an episode is
   the one ``suite.load(domain, task, task_kwargs={"random": ...})`` gives for the same draws;
 - the keywords are the suite task's own: ``time_limit`` (seconds) and ``random`` (the seed of the
-  task's random state before the first seeded reset).
+  task's random state before the first seeded reset), and ``action_repeat`` (K, default 1): each action
+  is held for K of the suite's control steps and their rewards summed, so a 1,000-step episode is
+  ceil(1000 / K) decisions with the same 0-1000 return; the suite's limit ends it, on a shorter last hold.
 
 Importing this module needs Gymnasium (the ``gym`` extra; dm_control is a core dependency):
 ``somarm.tasks`` imports it only when a ``dmc:`` task is named.
@@ -113,6 +115,12 @@ def _check_time_limit(time_limit: Any) -> float | None:
     return float(time_limit)
 
 
+def _check_action_repeat(action_repeat: Any) -> int:
+    if isinstance(action_repeat, bool) or not isinstance(action_repeat, (int, np.integer)) or action_repeat < 1:
+        raise ValueError(f"action_repeat takes a whole number of control steps >= 1, got {action_repeat!r}")
+    return int(action_repeat)
+
+
 def _check_random(random: Any) -> int | None:
     if random is None:
         return None
@@ -128,6 +136,7 @@ class SuiteEnv(gymnasium.Env):
       domain, task: a suite task (``dm_control.suite.ALL_TASKS``) with a bounded action spec.
       time_limit: the episode's length in seconds (None: the suite's own for the task).
       random: the seed of the task's random state until the first seeded ``reset``.
+      action_repeat: the suite's control steps each action is held for, their rewards summed.
 
     Raises:
       ValueError: an unknown domain or task, an unbounded action spec, or a bad keyword (one line).
@@ -135,8 +144,10 @@ class SuiteEnv(gymnasium.Env):
 
     metadata = {"render_modes": []}
 
-    def __init__(self, domain: str, task: str, *, time_limit: float | None = None, random: int | None = None):
+    def __init__(self, domain: str, task: str, *, time_limit: float | None = None, random: int | None = None,
+                 action_repeat: int = 1):
         split_name(f"{domain}-{task}")
+        self.action_repeat = _check_action_repeat(action_repeat)
         kwargs: dict[str, Any] = {"random": _check_random(random)}
         if (limit := _check_time_limit(time_limit)) is not None:
             kwargs["time_limit"] = limit
@@ -154,13 +165,15 @@ class SuiteEnv(gymnasium.Env):
                                        dtype=np.float64)
         # control.Environment keeps its step limit (time limit / control timestep) private.
         step_limit = self.environment._step_limit
-        #: Steps of one whole episode (the time limit over the control timestep; None: no limit).
-        self.episode_steps = int(round(step_limit)) if np.isfinite(step_limit) else None
+        #: Steps of one whole episode (the time limit over the control timestep, over ``action_repeat``;
+        #: None: no limit).
+        self.episode_steps = -(-int(round(step_limit)) // self.action_repeat) if np.isfinite(step_limit) else None
 
     @property
     def dt(self) -> float:
-        """Seconds of one step (the suite's control timestep), as Gymnasium's MuJoCo environments have it."""
-        return float(self.environment.control_timestep())
+        """Seconds of one step (the suite's control timestep times ``action_repeat``), as Gymnasium's MuJoCo
+        environments have it."""
+        return float(self.environment.control_timestep()) * self.action_repeat
 
     @property
     def physics(self):
@@ -185,10 +198,17 @@ class SuiteEnv(gymnasium.Env):
         return flatten(step.observation), {}
 
     def step(self, action):
-        step = self.environment.step(np.asarray(action, dtype=np.float64))
+        action = np.asarray(action, dtype=np.float64)
+        step = self.environment.step(action)
+        reward = float(step.reward or 0.0)
+        for _ in range(self.action_repeat - 1):
+            if step.last():
+                break
+            step = self.environment.step(action)
+            reward += float(step.reward or 0.0)
         terminated = bool(step.last() and step.discount == 0.0)
         truncated = bool(step.last() and not terminated)
-        return flatten(step.observation), float(step.reward or 0.0), terminated, truncated, {}
+        return flatten(step.observation), reward, terminated, truncated, {}
 
     def close(self) -> None:
         self.environment.close()

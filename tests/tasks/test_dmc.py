@@ -50,6 +50,27 @@ def test_the_time_limit_is_a_truncation_not_a_termination():
     assert all(end == (False, False) for end in ends[:-1])
 
 
+def test_a_repeated_action_is_held_for_k_suite_steps_its_rewards_summed_within_the_suites_limit():
+    k = 3
+    held, plain = dmc.SuiteEnv("cartpole", "balance", action_repeat=k), dmc.SuiteEnv("cartpole", "balance")
+    assert held.episode_steps == -(-plain.episode_steps // k)  # 1,000 suite steps: 334 decisions
+    assert held.dt == k * plain.dt
+    first, _ = held.reset(seed=5)
+    np.testing.assert_array_equal(first, plain.reset(seed=5)[0])
+    ends, rewards, rng = [], [], np.random.default_rng(1)
+    for _ in range(held.episode_steps):
+        action = _actions(rng, held, 1)[0]
+        observation, reward, terminated, truncated, _ = held.step(action)
+        steps = [plain.step(action) for _ in range(k) if not plain.environment._reset_next_step]
+        np.testing.assert_array_equal(observation, steps[-1][0])
+        assert reward == sum(step[1] for step in steps)
+        ends.append((terminated, truncated))
+        rewards.append(reward)
+    # the suite's own limit ends the episode on its last, shorter hold (1,000 = 333 x 3 + 1)
+    assert ends[-1] == (False, True) and all(end == (False, False) for end in ends[:-1])
+    assert 0.0 < sum(rewards) <= plain.episode_steps
+
+
 def test_the_same_seed_gives_the_same_episode_and_another_seed_another():
     def episode(seed):
         env = dmc.SuiteEnv("point_mass", "easy")
@@ -87,7 +108,9 @@ def test_an_unknown_domain_or_task_is_refused_in_one_line_naming_what_there_is(n
 
 @pytest.mark.parametrize("kwargs, key", [({"time_limit": 0}, "time_limit"), ({"time_limit": "long"}, "time_limit"),
                                          ({"time_limit": float("nan")}, "time_limit"), ({"random": -1}, "random"),
-                                         ({"random": 1.5}, "random")])
+                                         ({"random": 1.5}, "random"), ({"action_repeat": 0}, "action_repeat"),
+                                         ({"action_repeat": 2.5}, "action_repeat"),
+                                         ({"action_repeat": True}, "action_repeat")])
 def test_bad_keywords_are_refused_naming_the_key(kwargs, key):
     with pytest.raises(ValueError, match=f"^{key} takes"):
         dmc.SuiteEnv("reacher", "easy", **kwargs)
