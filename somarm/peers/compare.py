@@ -134,6 +134,11 @@ class OurRunner:
         """What its training depends on besides the task and the seed: its config."""
         return self.settings.to_dict()
 
+    def defaults(self) -> dict[str, Any]:
+        """Its config's fields at their defaults: a field a record lacks, where it is at its default
+        now, is a setting added since, which changes nothing the record holds."""
+        return json.loads(json.dumps(type(self.settings)().to_dict(), default=repr))
+
     def fingerprint_params(self, params: dict[str, Any]) -> dict[str, Any]:
         """The task parameters its training reads: all of them (it learns on the scaled observations)."""
         return params
@@ -184,6 +189,10 @@ class PeerRunner:
 
         entry = zoo.zoo_entry(self.kind, self.gym_id) if self.gym_id else None
         return {"zoo": entry, "stable_baselines3": stable_baselines3.__version__}
+
+    def defaults(self) -> dict[str, Any]:
+        """No setting of its own has a default a record could lack (its settings are the Zoo's entry)."""
+        return {}
 
     def fingerprint_params(self, params: dict[str, Any]) -> dict[str, Any]:
         """The task parameters its training reads: not a ``gym:ID``'s observation scaling (``_peer_params``)."""
@@ -442,9 +451,12 @@ def peer_budget(kind: str, config: CompareConfig) -> int:
     return config.samples
 
 
-def _earlier_seed(path: Path, fingerprint: dict, progress: bool, n_rungs: int):
+def _earlier_seed(path: Path, fingerprint: dict, progress: bool, n_rungs: int, defaults: dict[str, Any]):
     """A seed's scores from an earlier run of the same comparison (``path``), or None where there is
-    none, it was made with other settings, or it is damaged (then the seed is trained again)."""
+    none, it was made with other settings, or it is damaged (then the seed is trained again).
+
+    A setting the record lacks counts as the same where it is at its default now (``defaults``): a
+    learner option added since at its default trains exactly as before."""
     if not os.path.lexists(path):
         return None
     try:
@@ -452,11 +464,20 @@ def _earlier_seed(path: Path, fingerprint: dict, progress: bool, n_rungs: int):
     except ValueError as exc:
         print(f"{exc}; training that seed again", file=sys.stderr, flush=True)
         return None
-    if found[0] != fingerprint:
+    if _with_new_defaults(found[0], fingerprint, defaults) != fingerprint:
         if progress:
             print(f"{path} was made with other settings; training that seed again", file=sys.stderr, flush=True)
         return None
     return found[1:]
+
+
+def _with_new_defaults(found: dict, fingerprint: dict, defaults: dict[str, Any]) -> dict:
+    """``found`` with the settings it lacks filled in from ``fingerprint`` where they are at their defaults."""
+    settings, now = found.get("settings"), fingerprint.get("settings")
+    if not isinstance(settings, dict) or not isinstance(now, dict):
+        return found
+    added = {k: v for k, v in now.items() if k not in settings and k in defaults and defaults[k] == v}
+    return {**found, "settings": {**settings, **added}} if added else found
 
 
 def _seed_record(path: Path, n_rungs: int) -> tuple[dict, list[float], list[float], dict]:
@@ -569,8 +590,8 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
         described = runner.described()
         for seed in plan.seeds:
             fingerprint = plan.fingerprint(kind, seed, score, described)
-            earlier = (_earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress, len(runner.rungs))
-                       if resume else None)
+            earlier = (_earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress, len(runner.rungs),
+                                     runner.defaults()) if resume else None)
             if earlier is None:
                 todo.append((kind, seed, fingerprint))
             else:

@@ -375,3 +375,30 @@ def test_a_suite_task_is_compared_as_a_gymnasium_environment_with_the_peers_on_t
     assert env.unwrapped.domain == "cartpole" and described.startswith("somarm-dmc/cartpole-balance-v0")
     env.close()
     assert compare.default_samples("dmc:cartpole-balance") == tasks.record("dmc:cartpole-balance").n_steps
+
+
+def test_a_record_lacking_a_setting_at_its_default_is_kept_and_one_lacking_another_is_trained_again(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    argv = ["compare", "reach2", "--learners", "somq", "--samples", "400", "--seeds", "1",
+            "--observations", "20", "--out", str(out), "--resume"]
+    assert main(argv) == 0
+    path = out / "seeds" / "somq-0.json"
+    record = json.loads(path.read_text())
+    settings = record["fingerprint"]["settings"]
+    from somarm.learners.somq import SOMQConfig
+
+    defaults = SOMQConfig().to_dict()
+    at_default = next(k for k, v in settings.items() if defaults[k] == v)
+    elsewhere = next(k for k, v in settings.items() if defaults[k] != v)
+    # A setting added since, at its default, changes nothing the record holds: kept.
+    del settings[at_default]
+    path.write_text(json.dumps(record))
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "(kept from the earlier run)" in capsys.readouterr().err
+    # A record lacking a setting that is not at its default was made otherwise: trained again.
+    record = json.loads(path.read_text())
+    del record["fingerprint"]["settings"][elsewhere]
+    path.write_text(json.dumps(record))
+    assert main(argv) == 0
+    assert "was made with other settings; training that seed again" in capsys.readouterr().err

@@ -23,7 +23,7 @@ def test_render_lists_every_claim_and_figure(tmp_path):
     text = render([section], header=["hello"], out_dir=tmp_path)
     assert text.startswith("# somarm: reproduction of Smith (2002)\n\nhello\n")
     assert "| demo | It works. | 3 of 3 | >= 3 | **holds** |" in text
-    assert "**does not hold**" in text and "![a](figures/a.png)" in text
+    assert "**does not hold**" in text and "](figures/a.png)" in text
     assert "run length 10 (ours)" in text
     odd = render([Section("x", "X", claims=[Claim("a", "mean |d| 0.3", True)])], header=[], out_dir=tmp_path)
     assert "| x | a | mean \\|d\\| 0.3 |  | **holds** |" in odd
