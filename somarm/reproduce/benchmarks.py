@@ -10,6 +10,7 @@ greedy policy over the same fresh episodes.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,11 +21,11 @@ from somarm.peers import compare, zoo
 from somarm.peers.plot import NAMES, compare_figure
 from somarm.reproduce import yardsticks
 from somarm.reproduce.common import Context, fmt
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 
 __all__ = ["ENVIRONMENTS", "LEARNERS", "BASELINES", "PARTS", "TARGETS", "SPEED", "TUNING_SEEDS", "FRESH", "ReportSeeds", "compare_groups", "reach", "budgets", "train",
-           "measure", "benchmarks", "benchmarks_pendulum",
-           "benchmarks_invertedpendulum", "benchmarks_reacher", "benchmarks_mountaincar"]
+           "measure", "Trained", "part", "benchmarks"]
 
 #: The environments of the part, with this project's budget for TD3 and SAC where the Zoo has none.
 #: At 20,000 samples SB3's default TD3 had not settled on InvertedPendulum-v5: greedy returns of 1000,
@@ -244,30 +245,29 @@ def _published(envs: tuple[str, ...]) -> list[str]:
     return lines
 
 
-def benchmarks(ctx: Context, envs: tuple[str, ...] = tuple(ENVIRONMENTS), name: str = "benchmarks",
-               seeds: ReportSeeds | None = None) -> Section:
-    """SOM-Q, SOM-Q+, the Motoric Map, tabular Q-learning, TD3 and SAC on Pendulum-v1,
-    InvertedPendulum-v5, Reacher-v5 and MountainCarContinuous-v0 (or on ``envs`` alone): greedy return
-    against samples and wall time, final returns, time to the peers' converged return and to the targets.
+@dataclass(frozen=True)
+class Trained:
+    """What a benchmarks part trained: its seeds and episodes (after ``--quick``) and each environment's results."""
 
-    Args:
-      ctx: where and how the part runs (``ctx.quick``: tiny budgets, one seed, few episodes).
-      envs: the environments, from ``ENVIRONMENTS``.
-      name: the part's name in the report.
-      seeds: the seeds of somarm's learners and of the peers (default: 5 from the report's ``--seed`` for
-        every learner); quick mode keeps the first of each.
+    seeds: ReportSeeds
+    episodes: int
+    results: dict[str, dict]
 
-    Returns:
-      The report's section.
 
-    Raises:
-      KeyboardInterrupt: the training was stopped. ValueError: a figure cannot be written (one line).
-    """
+def _trained(ctx: Context, *, envs: tuple[str, ...], seeds: ReportSeeds | None) -> Trained:
+    """Every learner on ``envs`` at ``seeds`` (default: 5 from the report's ``--seed`` for every learner;
+    quick mode keeps the first of each)."""
     seeds = ReportSeeds.same(ctx.seed, 5) if seeds is None else seeds
     seeds = ctx.pick(seeds, ReportSeeds(range(seeds.ours.start, seeds.ours.start + 1),
                                         range(seeds.peers.start, seeds.peers.start + 1)))
     episodes = ctx.pick(100, 5)
-    results = train(ctx, seeds, episodes, envs)
+    return Trained(seeds, episodes, train(ctx, seeds, episodes, envs))
+
+
+def _reported(ctx: Context, trained: Trained, *, envs: tuple[str, ...], name: str) -> Section:
+    """The section of a benchmarks part: greedy return against samples and wall time, final returns, time
+    to the peers' converged return and to the targets, the yardsticks."""
+    seeds, episodes, results = trained.seeds, trained.episodes, trained.results
     m = measure(results)
     title = "Gymnasium's environments" if len(envs) > 1 else envs[0]
     section = Section(name, f"Benchmarks: SOM-Q on {title} beside TD3 and SAC")
@@ -302,28 +302,19 @@ def benchmarks(ctx: Context, envs: tuple[str, ...] = tuple(ENVIRONMENTS), name: 
 FRESH = ReportSeeds(range(10, 20), range(0, 5))
 
 
-# One environment at a time (``--only benchmarks_pendulum``): the same comparisons, in the same folders, as
-# the whole part's, so that with --resume the seeds one run finished count for the other.
-def benchmarks_pendulum(ctx: Context) -> Section:
-    """The benchmarks part on Pendulum-v1 alone, at the ``FRESH`` seeds."""
-    return benchmarks(ctx, ("Pendulum-v1",), "benchmarks_pendulum", FRESH)
+def part(envs: tuple[str, ...], name: str, seeds: ReportSeeds | None = None) -> Experiment:
+    """The benchmarks part on ``envs`` (from ``ENVIRONMENTS``), named ``name`` in the report: SOM-Q, SOM-Q+,
+    the Motoric Map, tabular Q-learning, TD3 and SAC, at ``seeds`` (default: 5 from the report's ``--seed``
+    for every learner)."""
+    return Experiment(None, functools.partial(_trained, envs=envs, seeds=seeds),
+                      functools.partial(_reported, envs=envs, name=name))
 
 
-def benchmarks_invertedpendulum(ctx: Context) -> Section:
-    """The benchmarks part on InvertedPendulum-v5 alone, at the ``FRESH`` seeds."""
-    return benchmarks(ctx, ("InvertedPendulum-v5",), "benchmarks_invertedpendulum", FRESH)
+#: Every environment in one part (``--only benchmarks``).
+benchmarks = part(tuple(ENVIRONMENTS), "benchmarks")
 
-
-def benchmarks_reacher(ctx: Context) -> Section:
-    """The benchmarks part on Reacher-v5 alone, at the ``FRESH`` seeds."""
-    return benchmarks(ctx, ("Reacher-v5",), "benchmarks_reacher", FRESH)
-
-
-def benchmarks_mountaincar(ctx: Context) -> Section:
-    """The benchmarks part on MountainCarContinuous-v0 alone, at the ``FRESH`` seeds."""
-    return benchmarks(ctx, ("MountainCarContinuous-v0",), "benchmarks_mountaincar", FRESH)
-
-
-#: The one-environment parts by their ``--only`` names (module-level functions: a worker imports them).
-PARTS = {part.__name__: part for part in (benchmarks_pendulum, benchmarks_invertedpendulum, benchmarks_reacher,
-                                          benchmarks_mountaincar)}
+#: One environment at a time (``--only benchmarks_pendulum``), at the ``FRESH`` seeds: the same comparisons,
+#: in the same folders, as the whole part's, so that with --resume the seeds one run finished count for the other.
+PARTS = {name: part((env_id,), name, FRESH) for name, env_id in (
+    ("benchmarks_pendulum", "Pendulum-v1"), ("benchmarks_invertedpendulum", "InvertedPendulum-v5"),
+    ("benchmarks_reacher", "Reacher-v5"), ("benchmarks_mountaincar", "MountainCarContinuous-v0"))}

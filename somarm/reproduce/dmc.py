@@ -15,6 +15,8 @@ names the seeds it has and lacks), so that a report can be written while seeds a
 
 from __future__ import annotations
 
+import functools
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -23,10 +25,11 @@ from somarm.peers import compare
 from somarm.peers.plot import NAMES
 from somarm.reproduce.benchmarks import ReportSeeds, compare_groups, reach
 from somarm.reproduce.common import Context, fmt
+from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 
 __all__ = ["TASKS", "LEARNERS", "PEER_SAMPLES", "TARGET_TASKS", "TARGET_SHARE", "SEEDS", "EPISODES", "PUBLISHED", "SOURCE",
-           "budgets", "recorded_seeds", "train", "measure", "dmc", "dmc_recorded", "PARTS"]
+           "budgets", "recorded_seeds", "train", "measure", "dmc", "dmc_recorded", "Trained", "PARTS"]
 
 #: The suite tasks of the part.
 TASKS = ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:cartpole-balance", "dmc:cartpole-swingup",
@@ -240,26 +243,29 @@ def _short(m: dict) -> list[str]:
     return lines
 
 
-def dmc(ctx: Context, seeds: ReportSeeds = SEEDS, *, name: str = "dmc", recorded: bool = False) -> Section:
-    """SOM-Q, SOM-Q+, TD3 and SAC on ``TASKS``: greedy return against samples and wall time, final returns,
-    samples and seconds to 90% of SAC's final return, and the target claims on ``TARGET_TASKS``.
+@dataclass(frozen=True)
+class Trained:
+    """What the part trained (or found recorded): its seeds and episodes (after ``--quick``), each task's results."""
 
-    Args:
-      ctx: where and how the part runs (``ctx.quick``: tiny budgets, one seed each side, few episodes).
-      seeds: the seeds of somarm's learners and of the peers.
-      name: the part's name in the report.
-      recorded: every learner only at the seeds already recorded in ``ctx.out_dir`` (none trained).
+    seeds: ReportSeeds
+    episodes: int
+    recorded: bool
+    results: dict[str, dict]
 
-    Returns:
-      The report's section.
 
-    Raises:
-      KeyboardInterrupt: the training was stopped. ValueError: a figure cannot be written (one line).
-    """
-    seeds = ctx.pick(seeds, ReportSeeds(range(seeds.ours.start, seeds.ours.start + 1),
-                                        range(seeds.peers.start, seeds.peers.start + 1)))
+def _trained(ctx: Context, *, recorded: bool) -> Trained:
+    """Every learner on ``TASKS`` at ``SEEDS`` (quick mode: the first seed of each side), or with
+    ``recorded`` only at the seeds already recorded in ``ctx.out_dir`` (none trained)."""
+    seeds = ctx.pick(SEEDS, ReportSeeds(range(SEEDS.ours.start, SEEDS.ours.start + 1),
+                                        range(SEEDS.peers.start, SEEDS.peers.start + 1)))
     episodes = ctx.pick(EPISODES, 3)
-    results = train(ctx, seeds, episodes, TASKS, recorded=recorded)
+    return Trained(seeds, episodes, recorded, train(ctx, seeds, episodes, TASKS, recorded=recorded))
+
+
+def _reported(ctx: Context, trained: Trained, *, name: str) -> Section:
+    """The part's section: greedy return against samples and wall time, final returns, samples and seconds
+    to 90% of SAC's final return, and the target claims on ``TARGET_TASKS``."""
+    seeds, episodes, recorded, results = trained.seeds, trained.episodes, trained.recorded, trained.results
     m = measure(results)
     section = Section(name, "The DeepMind Control Suite: SOM-Q beside TD3 and SAC")
     section.figures += [_folder(ctx, task) / "compare.png" for task in TASKS if task in results]
@@ -290,10 +296,12 @@ def dmc(ctx: Context, seeds: ReportSeeds = SEEDS, *, name: str = "dmc", recorded
     return section
 
 
-def dmc_recorded(ctx: Context) -> Section:
-    """The dmc part from the seed records already in the output folder (none trained)."""
-    return dmc(ctx, name="dmc_recorded", recorded=True)
+#: SOM-Q, SOM-Q+, TD3 and SAC on ``TASKS`` (``--only dmc``).
+dmc = Experiment(None, functools.partial(_trained, recorded=False), functools.partial(_reported, name="dmc"))
 
+#: The part from the seed records already in the output folder, none trained (``--only dmc_recorded``).
+dmc_recorded = Experiment(None, functools.partial(_trained, recorded=True),
+                          functools.partial(_reported, name="dmc_recorded"))
 
-#: The part's names for ``--only`` (module-level functions: a worker imports them).
+#: The part's names for ``--only``.
 PARTS = {"dmc": dmc, "dmc_recorded": dmc_recorded}
