@@ -6,7 +6,7 @@ SAC (Stable-Baselines3 with its defaults, on the suite through this project's ow
 at ``SEEDS.peers`` for ``PEER_SAMPLES`` each, every learner scored by the mean undiscounted return of
 its greedy policy over the same fresh episodes. Every seed of every learner is kept as it finishes
 (``seeds/`` in each comparison's folder), so ``reproduce --only dmc --resume`` goes on where a
-stopped run ended; TD3 and SAC take about 20 ms a sample on one core, so their seeds take hours.
+stopped run ended; TD3 and SAC take a gradient step per sample, so their seeds take far longer than SOM-Q's.
 
 ``--only dmc_recorded`` writes the same report from the seed records already in the output folder:
 every learner at the seeds recorded there, none trained (a task without any is left out; the report
