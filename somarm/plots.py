@@ -60,9 +60,7 @@ def save(fig: plt.Figure, path: str | Path, *, crop: bool = True) -> Path:
 def _title_of(fig: plt.Figure) -> str:
     """The figure's title (its suptitle, else its first axes' title), written into the PNG so that a
     report's image link can describe the figure; "" when it has none."""
-    if fig._suptitle is not None and fig._suptitle.get_text():
-        return fig._suptitle.get_text()
-    return next((ax.get_title() for ax in fig.axes if ax.get_title()), "")
+    return fig.get_suptitle() or next((ax.get_title() for ax in fig.axes if ax.get_title()), "")
 
 
 def forward_filled(values: np.ndarray) -> np.ndarray:

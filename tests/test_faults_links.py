@@ -25,6 +25,15 @@ def _victim(tmp_path: Path, name: str = "victim.txt") -> Path:
     return victim
 
 
+def _plant_links(tmp_path: Path, planted: list[Path]) -> list[Path]:
+    """Each written file of ``planted`` replaced by a link to a victim of its own; the victims."""
+    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
+    for link, victim in zip(planted, victims, strict=True):
+        link.unlink()
+        link.symlink_to(victim)
+    return victims
+
+
 COMPARE = ("compare", "throw_distance", "--learners", "tabular", "--samples", "200", "--seeds", "1",
            "--observations", "10", "--no-progress", "--resume")
 
@@ -33,10 +42,7 @@ def test_a_resumed_comparison_replaces_planted_links_and_leaves_their_targets(tm
     out = tmp_path / "cmp"
     assert somarm(*COMPARE, "--out", str(out)).returncode == 0
     planted = [out / name for name in ("seeds/tabular-0.json", "compare.json", "compare.png")]
-    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
-    for link, victim in zip(planted, victims, strict=True):
-        link.unlink()
-        link.symlink_to(victim)
+    victims = _plant_links(tmp_path, planted)
     done = somarm(*COMPARE, "--out", str(out))
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
     assert all(victim.read_text() == "the user's own file\n" for victim in victims)
@@ -61,10 +67,7 @@ def test_a_sweep_run_again_replaces_planted_links_and_leaves_their_targets(tmp_p
     out = tmp_path / "sweep"
     assert somarm(*SWEEP, "--out", str(out)).returncode == 0
     planted = [out / "results.csv", out / "best.json"]
-    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
-    for link, victim in zip(planted, victims, strict=True):
-        link.unlink()
-        link.symlink_to(victim)
+    victims = _plant_links(tmp_path, planted)
     done = somarm(*SWEEP, "--out", str(out))
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
     assert all(victim.read_text() == "the user's own file\n" for victim in victims)
@@ -125,10 +128,7 @@ def test_train_force_replaces_planted_links_and_leaves_their_targets(tmp_path):
     out = tmp_path / "run"
     assert somarm(*TRAIN, "--out", str(out)).returncode == 0
     planted = [out / name for name in ("learner.npz", "config.json", "summary.json")]
-    victims = [_victim(tmp_path, f"victim{k}.txt") for k in range(len(planted))]
-    for link, victim in zip(planted, victims, strict=True):
-        link.unlink()
-        link.symlink_to(victim)
+    victims = _plant_links(tmp_path, planted)
     done = somarm(*TRAIN, "--force", "--out", str(out))
     assert done.returncode == 0, done.stderr
     assert all(victim.read_text() == "the user's own file\n" for victim in victims)

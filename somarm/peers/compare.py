@@ -587,11 +587,11 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
     found: dict[tuple[str, int], tuple] = {}  # (kind, seed) -> (values, walls, settings)
     todo: list[tuple[str, int, dict]] = []  # (kind, seed, fingerprint)
     for kind, runner in plan.runners.items():
-        described = runner.described()
+        described, defaults = runner.described(), runner.defaults()
         for seed in plan.seeds:
             fingerprint = plan.fingerprint(kind, seed, score, described)
             earlier = (_earlier_seed(out / "seeds" / f"{kind}-{seed}.json", fingerprint, progress, len(runner.rungs),
-                                     runner.defaults()) if resume else None)
+                                     defaults) if resume else None)
             if earlier is None:
                 todo.append((kind, seed, fingerprint))
             else:

@@ -74,6 +74,10 @@ class ReportSeeds:
         """Seeds ``first .. first + count - 1`` for every learner."""
         return cls(range(first, first + count), range(first, first + count))
 
+    def first(self) -> ReportSeeds:
+        """The first seed of each side (what ``--quick`` keeps)."""
+        return ReportSeeds(range(self.ours.start, self.ours.start + 1), range(self.peers.start, self.peers.start + 1))
+
     def text(self) -> str:
         """The seeds as the report's choices state them."""
         def span(seeds: range) -> str:
@@ -258,8 +262,7 @@ def _trained(ctx: Context, *, envs: tuple[str, ...], seeds: ReportSeeds | None) 
     """Every learner on ``envs`` at ``seeds`` (default: 5 from the report's ``--seed`` for every learner;
     quick mode keeps the first of each)."""
     seeds = ReportSeeds.same(ctx.seed, 5) if seeds is None else seeds
-    seeds = ctx.pick(seeds, ReportSeeds(range(seeds.ours.start, seeds.ours.start + 1),
-                                        range(seeds.peers.start, seeds.peers.start + 1)))
+    seeds = ctx.pick(seeds, seeds.first())
     episodes = ctx.pick(100, 5)
     return Trained(seeds, episodes, train(ctx, seeds, episodes, envs))
 

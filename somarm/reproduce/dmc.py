@@ -256,8 +256,7 @@ class Trained:
 def _trained(ctx: Context, *, recorded: bool) -> Trained:
     """Every learner on ``TASKS`` at ``SEEDS`` (quick mode: the first seed of each side), or with
     ``recorded`` only at the seeds already recorded in ``ctx.out_dir`` (none trained)."""
-    seeds = ctx.pick(SEEDS, ReportSeeds(range(SEEDS.ours.start, SEEDS.ours.start + 1),
-                                        range(SEEDS.peers.start, SEEDS.peers.start + 1)))
+    seeds = ctx.pick(SEEDS, SEEDS.first())
     episodes = ctx.pick(EPISODES, 3)
     return Trained(seeds, episodes, recorded, train(ctx, seeds, episodes, TASKS, recorded=recorded))
 
