@@ -26,6 +26,27 @@ def _train(task, learner, steps: int) -> None:
         learner.learn(task.step(actions), task.next_observations, task.terminal)
 
 
+def learner_for(task, settings, seed: int):
+    """SOM-Q with ``settings`` over ``task``'s observation and action boxes, seeded by ``seed``."""
+    return make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
+                action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic,
+                seed=seed)
+
+
+def scores_at_rungs(task, judge, learner, starts, rungs) -> dict[int, tuple[float, float]]:
+    """Train ``learner`` on ``task`` up to each rung in turn: at each, the greedy mean return on ``judge``
+    from ``starts`` and the training seconds so far."""
+    done, wall, scores = 0, 0.0, {}
+    for rung in rungs:
+        start = time.perf_counter()
+        _train(task, learner, rung - done)
+        wall += time.perf_counter() - start
+        done = rung
+        returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
+        scores[rung] = (float(returns.mean()), wall)
+    return scores
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("task")
@@ -54,17 +75,8 @@ def main() -> None:
         params = record.complete(tasks.check_params(args.task, task_params), seed)
         task, judge = tasks.make(args.task, seed=seed, **params), tasks.make(args.task, seed=seed, **params)
         starts = judge.sample_starts(evaluation_rng(seed), args.episodes)
-        learner = make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
-                       action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic,
-                       seed=seed)
-        done, wall, scores = 0, 0.0, {}
-        for rung in rungs:
-            start = time.perf_counter()
-            _train(task, learner, rung - done)
-            wall += time.perf_counter() - start
-            done = rung
-            returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
-            scores[rung] = (round(float(returns.mean()), 2), round(wall, 1))
+        scored = scores_at_rungs(task, judge, learner_for(task, settings, seed), starts, rungs)
+        scores = {rung: (round(mean, 2), round(wall, 1)) for rung, (mean, wall) in scored.items()}
         print(json.dumps({"seed": seed, "set": overrides, "task_set": args.task_set, "scores": scores}), flush=True)
 
 

@@ -15,19 +15,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
+import sys
 from pathlib import Path
 
 from somarm import tasks
-from somarm.learners import make, presets
+from somarm.learners import presets
 from somarm.run.evaluation import episode_starts
 
-
-def _train(task, learner, steps: int) -> None:
-    """``steps`` steps of one trial on an episodic task (as ``somarm compare`` trains)."""
-    for _ in range(steps):
-        actions = learner.act(task.reset())
-        learner.learn(task.step(actions), task.next_observations, task.terminal)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from tune_benchmark import learner_for, scores_at_rungs  # noqa: E402  (the scoring both tuning scripts share)
 
 
 def _register_repeat(name: str, k: int) -> str:
@@ -96,17 +92,9 @@ def main() -> None:
         train_params = {**params, **_task_set(args.train_task_set)}
         task, judge = tasks.make(name, seed=seed, **train_params), tasks.make(name, seed=seed, **params)
         starts = episode_starts(judge, args.episodes, seed)
-        learner = make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
-                       action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic,
-                       seed=seed)
-        done, wall, scores = 0, 0.0, {}
-        for rung in rungs:
-            start = time.perf_counter()
-            _train(task, learner, rung - done)
-            wall += time.perf_counter() - start
-            done = rung
-            returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
-            scores[rung] = round(float(returns.mean()), 1)
+        scored = scores_at_rungs(task, judge, learner_for(task, settings, seed), starts, rungs)
+        scores = {rung: round(mean, 1) for rung, (mean, _) in scored.items()}
+        wall = scored[rungs[-1]][1]
         row = {"task": args.task, "seed": seed, "steps": samples, "preset": preset,
                "settings": [f"{k}={v}" for k, v in overrides.items()],
                "task_settings": [f"{k}={json.dumps(v)}" for k, v in given.items()],
