@@ -21,7 +21,8 @@ tilings, and each map answers with a blend of its k nearest units (``k_nearest``
   alpha / G, as tile coding divides its step by the tilings: every map moves its part towards what
   the others leave unexplained, so at the winners the sum moves by alpha times the error, as one
   map's value does. With one group over every dimension in order and k = 1 these are the paper's
-  steps exactly (R = 0). Step 9 pulls each map towards its part of the observation round its
+  steps exactly (R = 0). With ``action_gap`` (advantage learning) each action unit's target in step 8
+  is lowered by ``action_gap`` times its Q's shortfall from the best at s (``_gap_targets``). Step 9 pulls each map towards its part of the observation round its
   nearest unit.
 - the interpolated response: the greedy action unit's weights moved, along each axis of the action
   map's grid, to the top of the parabola through the summed Q of the unit and its two grid
@@ -259,9 +260,10 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, linear, f
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
                  input_weights, action_weights, q, slopes, linear, factored, action_shape, mid, span, groups, shapes, k,
                  alpha, lambda_s, lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors,
-                 grow_now):
+                 grow_now, gap):
     """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring;
-    with ``linear`` each moved unit's constant and slopes take the normalised step of its own answer)."""
+    with ``linear`` each moved unit's constant and slopes take the normalised step of its own answer; with
+    ``gap`` > 0 step 8 moves action unit a towards ``target - gap (max_b Q(s, b) - Q(s, a))``)."""
     n_groups, width = groups.shape
     n_units = q.shape[1] // n_groups
     n_actions = action_weights.shape[1]
@@ -271,6 +273,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     columns = np.zeros(n_columns)
     psi_c = np.zeros(n_columns)
     swap = np.zeros(n_columns, dtype=np.int64)
+    targets = np.empty(n_actions)
     psi_s = np.empty(n_units)
     psi_a = np.empty(n_actions)
     part = np.empty(width)
@@ -323,6 +326,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
             expand(columns, action_shape, values)
             _factored_reach(a_k, action_shape, n_a, neighbourhood_q, psi_c, swap)
         neighbourhood_row(offsets_a, a_k, n_a, psi_a)
+        _gap_targets(target, gap, values, targets)
         # Step 7: the shared action map learns only if the perturbed action looks like an improvement.
         if target > values[a_k]:
             if wrapping:
@@ -340,17 +344,17 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                 if factored:
                     _move_factored(table, slopes[trial], linear, observations[trial], input_weights[trial], groups[g],
                                    mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1],
-                                   neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, target, values, parts[g])
+                                   neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, targets, values, parts[g])
                     continue
                 if linear:
                     _move_linear(table, slopes[trial], observations[trial], input_weights[trial], groups[g], mid, span,
                                  z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1], neighbourhood_q, n_s,
-                                 offsets_s, step * weight, psi_a, a_k, target, values, parts[g])
+                                 offsets_s, step * weight, psi_a, a_k, targets, values, parts[g])
                     continue
                 if not neighbourhood_q:
                     value = table[centre, a_k]
                     rest = values[a_k] - parts[g, a_k]
-                    table[centre, a_k] = value + step * weight * (target - rest - value)
+                    table[centre, a_k] = value + step * weight * (targets[a_k] - rest - value)
                     continue
                 # Only the units within the neighbourhood's reach (grid distance < n_s + 1) can move;
                 # each entry moves on its own, so the order of the units does not matter.
@@ -368,7 +372,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                                 if psi_a[a] > 0.0:
                                     value = table[m, a]
                                     rest = values[a] - parts[g, a]
-                                    table[m, a] = value + a_m * psi_a[a] * (target - rest - value)
+                                    table[m, a] = value + a_m * psi_a[a] * (targets[a] - rest - value)
         # Step 9: each map moves towards its part of the observation round its nearest unit; a growing
         # map adds the winner's squared distance to its sum first, and grows when it is time.
         for g in range(n_groups):
@@ -388,8 +392,24 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
 
 
 @numba.njit(cache=True, nogil=True)
+def _gap_targets(target, gap, values, targets):
+    """Each action unit's target for step 8 into ``targets``: ``target`` itself, or with ``gap`` > 0 the
+    advantage-learning target ``target - gap (max_b values[b] - values[a])`` (``values`` the summed Q at s)."""
+    if gap == 0.0:
+        for a in range(values.shape[0]):
+            targets[a] = target
+        return
+    top = values[0]
+    for a in range(1, values.shape[0]):
+        if values[a] > top:
+            top = values[a]
+    for a in range(values.shape[0]):
+        targets[a] = target - gap * (top - values[a])
+
+
+@numba.njit(cache=True, nogil=True)
 def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q, n_s,
-                 offsets_s, rate, psi_a, a_k, target, values, parts):
+                 offsets_s, rate, psi_a, a_k, targets, values, parts):
     """Step 8 for one of a map's k nearest units (``centre``, its weight folded into ``rate``) when units are
     local linear: each unit m within reach moves its constant and slopes by ``rate psi_S(m) psi_A(a) e z /
     (1 + |z|^2)``, ``e`` the error of its own answer at x (``target`` less the other maps' part less
@@ -399,7 +419,7 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
         answer = table[centre, a_k]
         for d in range(z.shape[0]):
             answer += slopes[centre, a_k, d] * z[d]
-        change = rate * (target - (values[a_k] - parts[a_k]) - answer) / norm
+        change = rate * (targets[a_k] - (values[a_k] - parts[a_k]) - answer) / norm
         table[centre, a_k] += change
         for d in range(z.shape[0]):
             slopes[centre, a_k, d] += change * z[d]
@@ -418,7 +438,7 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
                         answer = table[m, a]
                         for d in range(z.shape[0]):
                             answer += slopes[m, a, d] * z[d]
-                        change = rate * psi * psi_a[a] * (target - (values[a] - parts[a]) - answer) / norm
+                        change = rate * psi * psi_a[a] * (targets[a] - (values[a] - parts[a]) - answer) / norm
                         table[m, a] += change
                         for d in range(z.shape[0]):
                             slopes[m, a, d] += change * z[d]
@@ -447,7 +467,7 @@ def _factored_reach(a_k, action_shape, n_a, neighbourhood_q, psi_c, swap):
 
 @numba.njit(cache=True, nogil=True)
 def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q,
-                   n_s, offsets_s, rate, psi_c, swap, target, values, parts):
+                   n_s, offsets_s, rate, psi_c, swap, targets, values, parts):
     """Step 8 for one of a map's k nearest units with a factored table: each unit m within reach (``centre``
     alone without neighbourhood Q-learning) moves each column c with ``psi_c[c] > 0`` towards what the rest
     leaves of the target of the action unit ``swap[c]``, by ``rate psi_S(m) psi_c[c]`` (local linear units:
@@ -467,7 +487,7 @@ def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centr
                         if linear:
                             for d in range(z.shape[0]):
                                 answer += slopes[m, col, d] * z[d]
-                        change = rate * psi * psi_c[col] * (target - (values[swap[col]] - parts[col]) - answer) / norm
+                        change = rate * psi * psi_c[col] * (targets[swap[col]] - (values[swap[col]] - parts[col]) - answer) / norm
                         table[m, col] += change
                         if linear:
                             for d in range(z.shape[0]):

@@ -138,6 +138,14 @@ class SOMQConfig(ConfigBase):
     ``action_init=grid`` each action dimension's value is learned from every step that tries any of its
     places (``somarm.learners.groups``). Runs the grouped kernels."""
 
+    action_gap: float = 0.0
+    """Advantage learning (Bellemare et al. 2016, "Increasing the action gap"): step 8 moves action unit a
+    towards ``target - action_gap (max_b Q(s, b) - Q(s, a))`` instead of the target, in [0, 1). Where many
+    states share an input unit, or the time step is short, the values of the actions differ by less than
+    the noise of their targets; this widens the gap between the best action and the rest without changing
+    which action is best. 0 is the paper's Q-learning; above 0 runs the grouped kernels
+    (``somarm.learners.groups``)."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -166,6 +174,10 @@ class SOMQConfig(ConfigBase):
         if not isinstance(self.action_factored, (bool, np.bool_)):
             raise ValueError(f"action_factored must be true or false, got {self.action_factored!r}")
         object.__setattr__(self, "action_factored", bool(self.action_factored))
+        gap = check_number("action_gap", self.action_gap)
+        if not 0.0 <= gap < 1.0:
+            raise ValueError(f"action_gap must be in [0, 1) (0: plain Q-learning), got {self.action_gap!r}")
+        object.__setattr__(self, "action_gap", gap)
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -174,7 +186,7 @@ class SOMQConfig(ConfigBase):
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
         return (self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
-                or self.action_factored)
+                or self.action_factored or self.action_gap > 0.0)
 
     @property
     def table_columns(self) -> int:
@@ -411,7 +423,7 @@ class SOMQLearner(MapLearner):
                 self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
                 values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
                 self.action_high, self._wrap, self._errors,
-                self.config.grow_every > 0 and (self.t + 1) % self.config.grow_every == 0,
+                self.config.grow_every > 0 and (self.t + 1) % self.config.grow_every == 0, self.config.action_gap,
             )
             self._pending = False
             self.t += 1

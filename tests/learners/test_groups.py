@@ -46,7 +46,9 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
                                      {"input_groups": "pairs", "local_linear": True, "neighbourhood_q": False},
                                      {"input_groups": "pairs", "action_factored": True, "k_nearest": 2},
                                      {"input_groups": "singles", "action_factored": True, "local_linear": True,
-                                      "response": "interpolated", "neighbourhood_q": False}])
+                                      "response": "interpolated", "neighbourhood_q": False},
+                                     {"input_groups": "pairs", "k_nearest": 2, "action_gap": 0.5},
+                                     {"action_gap": 0.8, "action_factored": True, "local_linear": True}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
@@ -303,3 +305,36 @@ def test_a_factored_table_holds_a_column_per_place_of_each_axis_and_answers_thei
     learner.q[0, 0] = [0.0, 1.0, 0.0, 0.0, 0.5]  # rows: place 1 best; cols: place 2 best
     np.testing.assert_array_equal(learner.predict([[0.1]]), [[1.0, 1.0]])
     assert learner.greedy_units(np.array([[0.1]]))[1][0] == 1 * 3 + 2
+
+
+def _bandit_values(gap, steps=4000):
+    """One input unit, 3 action units on a line, each step a random unit rewarded 0, 1 or 0.5 (no next
+    state), a constant learning rate of 0.05: the learned Q of the three units."""
+    config = SOMQConfig(
+        input_shape=(1,), action_shape=(3,), action_init="grid", alpha=Schedule(0.05), lambda_s=Schedule(0.0),
+        lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0), p=Schedule(1.0), epsilon=Schedule(0.0),
+        neighbourhood_q=False, input_groups="0", action_gap=gap)
+    learner = SOMQLearner(config, seed=4, observation_low=[0.0], observation_high=[1.0], action_low=[-1.0],
+                          action_high=[1.0])
+    rewards = {-1.0: 0.0, 0.0: 1.0, 1.0: 0.5}
+    for _ in range(steps):
+        action = learner.act([[0.5]])
+        learner.learn([rewards[float(action[0, 0])]])
+    return learner.q[0, 0]
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.5, 0.75])
+def test_advantage_learning_keeps_the_best_value_and_widens_the_others_gaps_by_one_over_one_less_the_gap(gap):
+    # The fixed point of Q(a) <- r(a) - gap (max_b Q(b) - Q(a)) is Q(a) = r* - (r* - r(a)) / (1 - gap).
+    expected = 1.0 - (1.0 - np.array([0.0, 1.0, 0.5])) / (1.0 - gap)
+    np.testing.assert_allclose(_bandit_values(gap), expected, atol=0.06)
+
+
+@pytest.mark.parametrize("gap", [-0.1, 1.0, float("nan"), "wide"])
+def test_an_action_gap_outside_zero_to_one_is_refused_in_one_line(gap):
+    with pytest.raises(ValueError, match="action_gap must be"):
+        SOMQConfig(action_gap=gap)
+
+
+def test_an_action_gap_runs_the_grouped_kernels_and_zero_is_the_papers_path():
+    assert SOMQConfig(action_gap=0.5).grouped and not SOMQConfig(action_gap=0.0).grouped
