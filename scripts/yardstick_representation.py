@@ -1,4 +1,4 @@
-"""The Reacher-v5 PD law held through SOM-Q input representations, on a tuning seed.
+"""A Reacher-v5 PD law held through SOM-Q input representations, on a tuning seed.
 
 The PD law of ``somarm.reproduce.yardsticks`` runs with torque noise for ``--states`` steps from the seed;
 a SOM-Q learner with the reacher preset changed by each ``--rep`` learns it from those states
@@ -29,14 +29,16 @@ def main() -> None:
     parser.add_argument("--states", type=int, default=50_000)
     parser.add_argument("--episodes", type=int, default=30)
     parser.add_argument("--noise", type=float, default=yardsticks.CONTROLLER_MAP_NOISE[ENV])
+    parser.add_argument("--controller", choices=sorted(yardsticks.REACHER_CONTROLLERS), default="jacobian",
+                        help="the law held: the Jacobian-transpose PD law or the joint-space one")
     parser.add_argument("--rep", action="append", default=[], metavar="'KEY=VALUE ...'",
                         help="one representation: settings changed from the reacher preset (repeatable)")
     args = parser.parse_args()
     if not 100 <= args.seed <= 199:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     scaling = gym_envs.BoxScaling(*gym_envs.estimate_bounds(gym_envs.GymParams(ENV), args.seed))
-    states, torques = yardsticks.controller_states(ENV, yardsticks._reacher_pd, scaling, args.states, args.noise,
-                                                   args.seed)
+    controller = yardsticks.REACHER_CONTROLLERS[args.controller]
+    states, torques = yardsticks.controller_states(ENV, controller, scaling, args.states, args.noise, args.seed)
     for text in args.rep or [""]:
         overrides = dict(item.split("=", 1) for item in text.split())
         start = time.perf_counter()
@@ -44,7 +46,7 @@ def main() -> None:
                                                    parse_settings(SOMQConfig, overrides), args.seed)
         learned = time.perf_counter() - start
         value = yardsticks.mean_return(ENV, policy, args.episodes, args.seed)
-        print(json.dumps({"seed": args.seed, "states": args.states, "set": overrides, "return": round(value, 2),
+        print(json.dumps({"seed": args.seed, "states": args.states, "controller": args.controller, "set": overrides, "return": round(value, 2),
                           "learn_s": round(learned, 1)}), flush=True)
 
 

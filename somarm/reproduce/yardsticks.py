@@ -17,7 +17,10 @@ The controllers are this project's:
 - InvertedPendulum-v5: a linear state feedback, ``u = K . obs``, with gains found by a random search
   over linear policies (they balance all 1,000 steps).
 - Reacher-v5: a Jacobian-transpose PD law on the fingertip-to-target vector of the observation,
-  ``u = kp J(q)^T (target - tip) - kd qdot``, with the arm's link lengths from the model (0.1, 0.11).
+  ``u = kp J(q)^T (target - tip) - kd qdot``, with the arm's link lengths from the model (0.1, 0.11);
+  and a joint-space PD law, ``u = kp (q* - q) - kd qdot``, q* the target's inverse kinematics (the
+  elbow solution nearer the arm's pose). The second is the stronger: what the preset's torques allow
+  when the controller is good; the first is the one the representations are shown learning.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "ENVIRONMENTS", "REPRESENTATIONS", "mean_return", "round_to",
+__all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "REACHER_JOINT_GAINS", "REACHER_CONTROLLERS", "ENVIRONMENTS", "REPRESENTATIONS", "mean_return", "round_to",
            "cell_centre", "learned_map", "controller_map", "controller_states", "through_map", "through_representation", "inverted_pendulum", "reacher", "measure", "table"]
 
 Policy = Callable[[np.ndarray], np.ndarray]
@@ -35,6 +38,8 @@ Policy = Callable[[np.ndarray], np.ndarray]
 INVERTED_PENDULUM_GAINS = np.array([-0.05, 2.82, 1.67, 2.73])
 #: ``(kp, kd)`` of Reacher-v5's PD law.
 REACHER_GAINS = (20.0, 0.1)
+#: ``(kp, kd)`` of Reacher-v5's joint-space PD law (over the joint angles' errors, radians).
+REACHER_JOINT_GAINS = (0.5, 0.1)
 _REACHER_LINKS = (0.1, 0.11)
 #: The input maps learned on a controller's own states: the presets' 400 units, 2,500 and 10,000;
 #: the states it visits with this much torque noise (sd; a sixth of InvertedPendulum-v5's box, a tenth
@@ -357,8 +362,35 @@ def _reacher_pd(obs: np.ndarray) -> np.ndarray:
     return kp * jacobian.T @ -obs[8:10] - kd * obs[6:8]
 
 
+def _reacher_joint_angles(obs: np.ndarray) -> np.ndarray:
+    """How far each joint is from the pose that puts the fingertip on the target (the target's inverse
+    kinematics, of its two elbow solutions the one nearer the arm's pose), wrapped into (-pi, pi]."""
+    l1, l2 = _REACHER_LINKS
+    q = np.arctan2(obs[2:4], obs[0:2])
+    target_x, target_y = obs[4], obs[5]
+    bend = np.arccos(np.clip((target_x ** 2 + target_y ** 2 - l1 ** 2 - l2 ** 2) / (2.0 * l1 * l2), -1.0, 1.0))
+    best = None
+    for elbow in (bend, -bend):
+        shoulder = np.arctan2(target_y, target_x) - np.arctan2(l2 * np.sin(elbow), l1 + l2 * np.cos(elbow))
+        error = np.angle(np.exp(1j * (np.array([shoulder, elbow]) - q)))
+        if best is None or np.abs(error).sum() < np.abs(best).sum():
+            best = error
+    return best
+
+
+def _reacher_joint_pd(obs: np.ndarray) -> np.ndarray:
+    """The joint-space PD law ``u = kp (q* - q) - kd qdot``, q* the target's inverse kinematics."""
+    kp, kd = REACHER_JOINT_GAINS
+    return kp * _reacher_joint_angles(obs) - kd * obs[6:8]
+
+
+#: The Reacher-v5 controllers the yardsticks replay: the Jacobian-transpose PD law and the joint-space one.
+REACHER_CONTROLLERS: dict[str, Policy] = {"jacobian": _reacher_pd, "joint": _reacher_joint_pd}
+
+
 def reacher(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[str, float]]:
-    """No torque, the PD law, the PD law rounded to torque grids, and (with ``map_steps``) its state
+    """No torque, the PD law, the PD law rounded to torque grids, the joint-space PD law as it is and rounded
+    to the preset's grid, and (with ``map_steps``) the PD law's state
     seen through the input map SOM-Q learns in that many steps and through maps learned on its own states."""
     from somarm.learners import presets
     from somarm.tasks import gym_envs
@@ -371,6 +403,8 @@ def reacher(episodes: int, seed: int, map_steps: int | None = 0) -> list[tuple[s
     if not np.array_equal(preset, whole):
         rows.append((f"PD law rounded to a {grid} grid over the whole box ({_torques(whole)} per joint)",
                      round_to(_reacher_pd, whole)))
+    rows += [("joint-space PD law (over the joint angles to the target's inverse kinematics)", _reacher_joint_pd),
+             (f"joint-space PD law rounded to the preset's {grid} grid", round_to(_reacher_joint_pd, preset))]
     rows += _map_rows("Reacher-v5", _reacher_pd, map_steps, seed)
     if map_steps != 0:  # the task's own scaling, estimated from random actions (an infinite Box)
         bounds = gym_envs.estimate_bounds(gym_envs.GymParams("Reacher-v5"), seed)

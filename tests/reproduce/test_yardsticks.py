@@ -30,3 +30,22 @@ def test_a_map_over_some_dimensions_is_seen_through_and_the_others_pass_as_obser
     np.testing.assert_allclose(seen(np.array([0.3, 1.9, 1.2])), [0.3, 1.5, 1.2])
     np.testing.assert_allclose(yardsticks.through_map(lambda obs: obs.copy(), scaling, np.array([[0.5, 0.5, 0.5]]))(
         np.array([0.3, 1.9, 1.2])), [1.0, 1.0, 1.0])
+
+
+def test_the_joint_space_law_aims_at_the_pose_that_puts_the_fingertip_on_the_target():
+    l1, l2 = 0.1, 0.11
+    q = np.array([0.7, -1.1])
+    tip = np.array([l1 * np.cos(q[0]) + l2 * np.cos(q.sum()), l1 * np.sin(q[0]) + l2 * np.sin(q.sum())])
+    obs = np.concatenate([np.cos(q), np.sin(q), tip, [0.0, 0.0], [0.0, 0.0]])
+    np.testing.assert_allclose(yardsticks._reacher_joint_angles(obs), 0.0, atol=1e-9)
+    moved = obs.copy()
+    moved[0:4] = [np.cos(0.9), np.cos(-1.1), np.sin(0.9), np.sin(-1.1)]  # the shoulder 0.2 rad past its aim
+    np.testing.assert_allclose(yardsticks._reacher_joint_angles(moved), [-0.2, 0.0], atol=1e-9)
+
+
+def test_the_joint_space_law_reaches_better_than_the_jacobian_law_at_the_presets_torques():
+    grid = np.array([-0.1, 0.0, 0.1])
+    joint = yardsticks.mean_return("Reacher-v5", yardsticks.round_to(yardsticks._reacher_joint_pd, grid), 10, 0)
+    jacobian = yardsticks.mean_return("Reacher-v5", yardsticks.round_to(yardsticks._reacher_pd, grid), 10, 0)
+    # Measured over episodes reset with seeds 0-9: about -4.7 against -5.7 (doing nothing: about -12).
+    assert joint > -5.2 and joint > jacobian + 0.5, (joint, jacobian)
