@@ -135,7 +135,8 @@ def deviation(x, weights, group, mid, span, out):
 
 @numba.njit(cache=True, nogil=True)
 def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, values):
-    """``_summed`` with local linear units: unit u answers ``q[u, a] + slopes[u, a] . z_u`` (``deviation``)."""
+    """``_summed`` with local linear units: unit u answers ``q[u, a] + slopes[u, a] . z_u`` (``deviation``;
+    ``slopes[u, 0]`` for every a where the slopes are shared, one column)."""
     for a in range(q.shape[1]):
         values[a] = 0.0
     for g in range(units.shape[0]):
@@ -144,10 +145,18 @@ def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, valu
                 u = units[g, i]
                 deviation(x, weights[u], groups[g], mid, span, z)
                 for a in range(q.shape[1]):
-                    total = q[u, a]
-                    for d in range(z.shape[0]):
-                        total += slopes[u, a, d] * z[d]
+                    total = q[u, a] + _slope_term(slopes[u], a, z)
                     values[a] += phi[g, i] * total
+
+
+@numba.njit(cache=True, nogil=True)
+def _slope_term(slopes, a, z):
+    """``slopes[a] . z``, or ``slopes[0] . z`` where one slope vector is shared by every column."""
+    column = 0 if slopes.shape[0] == 1 else a
+    total = 0.0
+    for d in range(z.shape[0]):
+        total += slopes[column, d] * z[d]
+    return total
 
 
 @numba.njit(cache=True, nogil=True)
@@ -313,10 +322,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     if linear:
                         deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
                         for a in range(n_columns):
-                            total = table[u, a]
-                            for d in range(z.shape[0]):
-                                total += slopes[trial, u, a, d] * z[d]
-                            parts[g, a] += phi[trial, g, i] * total
+                            parts[g, a] += phi[trial, g, i] * (table[u, a] + _slope_term(slopes[trial, u], a, z))
                         continue
                     for a in range(n_columns):
                         parts[g, a] += phi[trial, g, i] * table[u, a]
@@ -413,16 +419,17 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
     """Step 8 for one of a map's k nearest units (``centre``, its weight folded into ``rate``) when units are
     local linear: each unit m within reach moves its constant and slopes by ``rate psi_S(m) psi_A(a) e z /
     (1 + |z|^2)``, ``e`` the error of its own answer at x (``target`` less the other maps' part less
-    ``q[m, a] + slopes[m, a] . z``), so that answer moves by the step a constant unit's value would."""
+    ``q[m, a] + slopes[m, a] . z``), so that answer moves by the step a constant unit's value would. Shared
+    slopes (one column) move with the tried unit a_k's change alone, after every constant has moved."""
+    shared = slopes.shape[1] == 1
     if not neighbourhood_q:
         norm = 1.0 + deviation(x, weights[centre], group, mid, span, z)
-        answer = table[centre, a_k]
-        for d in range(z.shape[0]):
-            answer += slopes[centre, a_k, d] * z[d]
+        answer = table[centre, a_k] + _slope_term(slopes[centre], a_k, z)
         change = rate * (targets[a_k] - (values[a_k] - parts[a_k]) - answer) / norm
         table[centre, a_k] += change
+        column = 0 if shared else a_k
         for d in range(z.shape[0]):
-            slopes[centre, a_k, d] += change * z[d]
+            slopes[centre, column, d] += change * z[d]
         return
     r0 = (centre - first) // cols
     c0 = (centre - first) - r0 * cols
@@ -433,15 +440,20 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
             if psi > 0.0:
                 m = first + r * cols + c
                 norm = 1.0 + deviation(x, weights[m], group, mid, span, z)
+                tried = 0.0
                 for a in range(table.shape[1]):
                     if psi_a[a] > 0.0:
-                        answer = table[m, a]
-                        for d in range(z.shape[0]):
-                            answer += slopes[m, a, d] * z[d]
+                        answer = table[m, a] + _slope_term(slopes[m], a, z)
                         change = rate * psi * psi_a[a] * (targets[a] - (values[a] - parts[a]) - answer) / norm
                         table[m, a] += change
+                        if shared:
+                            tried = change if a == a_k else tried
+                            continue
                         for d in range(z.shape[0]):
                             slopes[m, a, d] += change * z[d]
+                if shared:
+                    for d in range(z.shape[0]):
+                        slopes[m, 0, d] += tried * z[d]
 
 
 @numba.njit(cache=True, nogil=True)

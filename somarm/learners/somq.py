@@ -132,6 +132,12 @@ class SOMQConfig(ConfigBase):
     middle; each over its box's span), so one map's unit can hold how the value changes with every observed
     dimension (``somarm.learners.groups``). Runs the grouped kernels; not with ``grow_every``."""
 
+    shared_slopes: bool = False
+    """With ``local_linear``: one slope vector per input unit, shared by every action unit, ``q[u, a] +
+    slopes[u] . z``: how the value changes round a unit is learned from every step that unit answers for,
+    whatever action was tried (a per-state baseline), and each action keeps only its constant. Not with
+    ``action_factored``."""
+
     action_factored: bool = False
     """Q adds over the action grid's axes: ``Q(s, (i, j)) = Q_rows(s, i) + Q_cols(s, j)``, each map's table
     holding a column per row and per column of the action grid (3 + 3 for a 3x3 grid, not 9), so with
@@ -178,6 +184,13 @@ class SOMQConfig(ConfigBase):
         if not 0.0 <= gap < 1.0:
             raise ValueError(f"action_gap must be in [0, 1) (0: plain Q-learning), got {self.action_gap!r}")
         object.__setattr__(self, "action_gap", gap)
+        if not isinstance(self.shared_slopes, (bool, np.bool_)):
+            raise ValueError(f"shared_slopes must be true or false, got {self.shared_slopes!r}")
+        object.__setattr__(self, "shared_slopes", bool(self.shared_slopes))
+        if self.shared_slopes and (not self.local_linear or self.action_factored):
+            raise ValueError("shared_slopes needs local_linear=true and action_factored=false, got "
+                             f"local_linear={str(self.local_linear).lower()}, "
+                             f"action_factored={str(self.action_factored).lower()}")
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -258,8 +271,8 @@ class SOMQLearner(MapLearner):
             n_maps, width = table.shape
             n_c = config.table_columns
             n_floats += n_trials * (n_maps * n_s * (width + n_c + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
-            if config.local_linear:  # a slope per unit, table column and observed dimension
-                n_floats += n_trials * n_maps * n_s * n_c * size
+            if config.local_linear:  # a slope per unit, table column (one where shared) and observed dimension
+                n_floats += n_trials * n_maps * n_s * (1 if config.shared_slopes else n_c) * size
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -286,8 +299,8 @@ class SOMQLearner(MapLearner):
             self._shapes = np.tile(np.array(start, dtype=np.int64), (self.n_trials, n_maps, 1))
             self._errors = np.zeros((self.n_trials, n_maps * n_s))
             width = self.obs_dim if cfg.local_linear else 1
-            self.slopes = np.zeros((self.n_trials, n_maps * n_s if cfg.local_linear else 1,
-                                    cfg.table_columns if cfg.local_linear else 1, width))
+            columns = cfg.table_columns if cfg.local_linear and not cfg.shared_slopes else 1
+            self.slopes = np.zeros((self.n_trials, n_maps * n_s if cfg.local_linear else 1, columns, width))
             self._mid = (self.observation_low + self.observation_high) / 2.0
             self._span = self.observation_high - self.observation_low
             # No one input map of (n_units, obs_dim) units to draw: figures and views of a map skip it.

@@ -48,7 +48,10 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
                                      {"input_groups": "singles", "action_factored": True, "local_linear": True,
                                       "response": "interpolated", "neighbourhood_q": False},
                                      {"input_groups": "pairs", "k_nearest": 2, "action_gap": 0.5},
-                                     {"action_gap": 0.8, "action_factored": True, "local_linear": True}])
+                                     {"action_gap": 0.8, "action_factored": True, "local_linear": True},
+                                     {"input_groups": "pairs", "local_linear": True, "shared_slopes": True},
+                                     {"input_groups": "singles", "local_linear": True, "shared_slopes": True,
+                                      "neighbourhood_q": False, "k_nearest": 2}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
@@ -338,3 +341,43 @@ def test_an_action_gap_outside_zero_to_one_is_refused_in_one_line(gap):
 
 def test_an_action_gap_runs_the_grouped_kernels_and_zero_is_the_papers_path():
     assert SOMQConfig(action_gap=0.5).grouped and not SOMQConfig(action_gap=0.0).grouped
+
+
+def test_shared_slopes_hold_one_slope_vector_per_unit_and_answer_it_for_every_action():
+    config = small_config((3, 3), True, 0.5).with_changes({"input_groups": "pairs", "local_linear": True,
+                                                           "shared_slopes": True, "k_nearest": 2})
+    learner = SOMQLearner(config, n_trials=2, seed=9, **BOX4)
+    assert learner.slopes.shape == (2, 6 * 9, 1, 4)
+    _drive(learner, 60)
+    assert np.any(learner.slopes != 0.0)
+    # A unit's answer is its constant plus the one slope term: raising a unit's slope along a dimension
+    # the maps do not see shifts every action's summed value alike, so the greedy action does not change.
+    x = np.random.default_rng(2).random((2, 5, 4)) * [1.0, 2.0, 2.0, 4.0] - [0.0, 1.0, 0.0, 2.0]
+    before = learner.greedy_units(x)[1]
+    learner.slopes[..., 0, :] += 3.0
+    np.testing.assert_array_equal(learner.greedy_units(x)[1], before)
+
+
+def test_shared_slopes_learn_a_value_that_varies_within_a_unit_from_every_action_tried():
+    # One unit over dimension 0 only; the reward grows with dimension 1, which no map sees, and not with
+    # the action: shared slopes learn that from every step, and the summed Q then follows dimension 1.
+    config = SOMQConfig(input_shape=(1,), action_shape=(3,), action_init="grid", alpha=Schedule(0.2),
+                        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
+                        p=Schedule(1.0), epsilon=Schedule(0.0), neighbourhood_q=False, input_groups="0",
+                        local_linear=True, shared_slopes=True)
+    learner = SOMQLearner(config, seed=1, observation_low=[0.0, 0.0], observation_high=[1.0, 1.0],
+                          action_low=[-1.0], action_high=[1.0])
+    rng = np.random.default_rng(0)
+    for _ in range(3000):
+        x = rng.random((1, 2))
+        learner.act(x)
+        learner.learn(2.0 * x[:, 1])
+    slope = learner.slopes[0, 0, 0, 1]
+    assert abs(slope - 2.0) < 0.2, slope
+
+
+@pytest.mark.parametrize("changes", [{"shared_slopes": True}, {"shared_slopes": True, "local_linear": True,
+                                                                "action_factored": True}])
+def test_shared_slopes_without_local_linear_or_with_a_factored_table_are_refused_in_one_line(changes):
+    with pytest.raises(ValueError, match="shared_slopes needs local_linear=true and action_factored=false"):
+        SOMQConfig(**changes)
