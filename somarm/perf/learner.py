@@ -45,12 +45,12 @@ CASES = (
 
 
 #: The input representations (``input_groups``, ``k_nearest``, ``grow_every``, ``local_linear``,
-#: ``action_factored``, and the learning rule ``action_gap``) at Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset
+#: ``action_factored``, ``shared_slopes``, and the learning rule ``action_gap``) at Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset
 #: otherwise.
 _ONE_MAP = {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0, "local_linear": False,
-            "action_factored": False, "action_gap": 0.0}
+            "action_factored": False, "shared_slopes": False, "action_gap": 0.0}
 _PAIRS = {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0, "local_linear": False,
-          "action_factored": False, "action_gap": 0.0}
+          "action_factored": False, "shared_slopes": False, "action_gap": 0.0}
 REPRESENTATIONS = (
     ("one 20x20 map (the paper's)", _ONE_MAP),
     ("one 20x20 map, 3 nearest", {**_ONE_MAP, "k_nearest": 3}),
@@ -62,6 +62,7 @@ REPRESENTATIONS = (
                                              "k_nearest": 3, "local_linear": True}),
     ("45 pairs 10x10, 3 nearest, linear", {**_PAIRS, "k_nearest": 3, "local_linear": True}),
     ("45 pairs 5x5, 3 nearest, linear", {**_PAIRS, "input_shape": (5, 5), "k_nearest": 3, "local_linear": True}),
+    ("45 pairs 10x10, 3 nearest, shared", {**_PAIRS, "k_nearest": 3, "local_linear": True, "shared_slopes": True}),
     ("45 pairs 10x10, 3 nearest, factored", {**_PAIRS, "k_nearest": 3, "action_factored": True}),
     ("45 pairs 10x10, 3 nearest, gap 0.5", {**_PAIRS, "k_nearest": 3, "action_gap": 0.5}),
     ("one 20x20 map, action_gap 0.5", {**_ONE_MAP, "action_gap": 0.5}),
