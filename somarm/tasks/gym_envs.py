@@ -89,7 +89,7 @@ EVALUATION_STEPS = 1000
 BENCHMARKS: dict[str, tuple[str, int]] = {
     "Pendulum-v1": ("pendulum", 500_000),
     "MountainCarContinuous-v0": ("mountaincar", 200_000),
-    "InvertedPendulum-v5": ("invertedpendulum", 100_000),
+    "InvertedPendulum-v5": ("invertedpendulum", 400_000),
     "Reacher-v5": ("reacher", 200_000),
 }
 _DEFAULT_STEPS = 100_000
