@@ -153,6 +153,11 @@ _INVERTED_PENDULUM_SCALING = {"observation_ranges": {"0": [-1.0, 1.0], "1": [-0.
                               "observation_widened": {"0": 32.0, "2": 4.0, "3": 2.0}}
 
 
+#: Reacher-v5's scaling: the joint velocities (dimensions 6 and 7) over +-5 rad/s, the range a reaching arm
+#: moves in, instead of the random-action estimate (about +-20 rad/s, where a reach fills a tenth of a map).
+_REACHER_SCALING = {"observation_ranges": {"6": [-5.0, 5.0], "7": [-5.0, 5.0]}}
+
+
 def _benchmark(name: str, env_id: str, changes: dict[str, object], task_params: dict | None = None) -> Preset:
     """A preset for a Gymnasium benchmark (``gym:ID``): the common recipe with ``changes``; the run
     length is the task's (``tasks.gym_envs.BENCHMARKS``), not the preset's."""
@@ -181,7 +186,7 @@ def _benchmarks() -> tuple[Preset, ...]:
         "n_a": Schedule(2.0, InverseDecay(20_000.0))}, _INVERTED_PENDULUM_SCALING)
     reacher = _benchmark("reacher", "Reacher-v5", {
         "gamma": 0.95, "action_shape": (3, 3), "grid_span": 0.1, "input_groups": "pairs", "input_shape": (10, 10),
-        "k_nearest": 3, "n_a": Schedule(2.0)})
+        "k_nearest": 3, "local_linear": True, "shared_slopes": True, "n_a": Schedule(2.0)}, _REACHER_SCALING)
     # The DeepMind Control Suite's report tasks (``tasks.gym_envs``' DMC_BENCHMARKS).
     dmc = Preset(
         "dmc", "beyond the paper: the DeepMind Control Suite's one-torque tasks (dmc:cartpole-*, dmc:pendulum-swingup)",

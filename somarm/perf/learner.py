@@ -45,12 +45,13 @@ CASES = (
 
 
 #: The input representations (``input_groups``, ``k_nearest``, ``grow_every``, ``local_linear``,
-#: ``action_factored``, ``shared_slopes``, and the learning rule ``action_gap``) at Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset
-#: otherwise.
-_ONE_MAP = {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0, "local_linear": False,
-            "action_factored": False, "shared_slopes": False, "action_gap": 0.0}
-_PAIRS = {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0, "local_linear": False,
-          "action_factored": False, "shared_slopes": False, "action_gap": 0.0}
+#: ``action_factored``, ``shared_slopes``, and the learning rule ``action_gap``) at Reacher-v5's size: 10
+#: observed dimensions, a 3x3 grid of torques, the reacher preset otherwise (changes are made in order, so
+#: the preset's shared slopes and local linear units go off before a row grows its maps).
+_ONE_MAP = {"shared_slopes": False, "local_linear": False, "action_factored": False, "action_gap": 0.0,
+            "input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0}
+_PAIRS = {"shared_slopes": False, "local_linear": False, "action_factored": False, "action_gap": 0.0,
+          "input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0}
 REPRESENTATIONS = (
     ("one 20x20 map (the paper's)", _ONE_MAP),
     ("one 20x20 map, 3 nearest", {**_ONE_MAP, "k_nearest": 3}),

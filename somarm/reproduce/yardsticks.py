@@ -215,14 +215,23 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
     return lambda obs: learner.predict(task.scale(obs)[None])[0]
 
 
+#: What every row of ``REPRESENTATIONS`` starts from (the paper's one map, whatever the preset holds), so a
+#: row is the representation its label names; changes are made in order, so the preset's shared slopes and
+#: local linear units go off before a row grows its maps.
+_PLAIN = {"shared_slopes": False, "local_linear": False, "action_factored": False, "action_gap": 0.0,
+          "input_groups": "all", "k_nearest": 1, "grow_every": 0}
+
 #: The input representations the Reacher-v5 yardsticks learn the PD law through (``somarm.learners.groups``).
 REPRESENTATIONS = (
     ("one 20x20 map (the paper's)", {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 1}),
     ("one 20x20 map, its 3 nearest units", {"input_groups": "all", "input_shape": (20, 20), "k_nearest": 3}),
     ("45 maps of 10x10, one per pair of dimensions", {"input_groups": "pairs", "input_shape": (10, 10),
                                                       "k_nearest": 1}),
-    ("45 pair maps of 10x10, their 3 nearest units (the reacher preset's)",
+    ("45 pair maps of 10x10, their 3 nearest units",
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3}),
+    ("45 pair maps of 10x10, their 3 nearest units, local linear units with one slope vector per unit "
+     "(local_linear, shared_slopes: the reacher preset's)",
+     {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "local_linear": True, "shared_slopes": True}),
     ("45 pair maps growing to 10x10 (a row or column every 1,000 steps), their 3 nearest units",
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "grow_every": 1000}),
     ("45 pair maps of 10x10, their 3 nearest units, Q adding over the torque grid's axes (action_factored)",
@@ -242,7 +251,8 @@ def _representation_rows(env_id: str, policy: Policy, scaling, map_steps: int | 
     states, torques = controller_states(env_id, policy, scaling, steps, noise, seed)
     where = f"learned on the controller's own states ({steps:,} steps, torque noise sd {noise:g})"
     return [(f"PD law as SOM-Q holds it through {label}, {where}",
-             through_representation(env_id, states, torques, scaling, {**changes, "response": "winner"}, seed))
+             through_representation(env_id, states, torques, scaling, {**_PLAIN, **changes, "response": "winner"},
+                                    seed))
             for label, changes in REPRESENTATIONS]
 
 

@@ -15,12 +15,26 @@ def test_a_representation_learns_to_hold_the_pd_law_on_its_own_states(changes):
     states, torques = yardsticks.controller_states("Reacher-v5", yardsticks._reacher_pd, scaling, 6000, 0.1, 0)
     assert states.shape == (6000, 10) and torques.shape == (6000, 2) and np.abs(torques).max() <= 1.0
     policy = yardsticks.through_representation("Reacher-v5", states, torques, scaling,
-                                               {**changes, "response": "winner"}, 0)
+                                               {**yardsticks._PLAIN, **changes, "response": "winner"}, 0)
     rounded = yardsticks.round_to(lambda torque: torque, np.array([-0.1, 0.0, 0.1]))  # the preset's grid
     raw = scaling.unscale(states[-1000:])
     agree = np.mean([np.mean(policy(o) == rounded(t)) for o, t in zip(raw, torques[-1000:], strict=True)])
     # A random grid torque agrees on a joint 1 time in 3; the learned table is measurably better.
     assert agree > 0.38, agree
+
+
+def test_every_representation_row_is_what_its_label_names_whatever_the_reacher_preset_holds():
+    from somarm.learners import presets
+    from somarm.perf import learner as bench
+
+    preset = presets.get("reacher")
+    rows = [({**yardsticks._PLAIN, **changes}) for _, changes in yardsticks.REPRESENTATIONS]
+    rows += [changes for _, changes in bench.REPRESENTATIONS]
+    for changes in rows:
+        config = preset.with_changes(changes)  # in order: each change is checked as it is made
+        assert all(getattr(config, key) == value for key, value in changes.items()), changes
+    plain = preset.with_changes(yardsticks._PLAIN)
+    assert (plain.input_groups, plain.local_linear, plain.shared_slopes) == ("all", False, False)
 
 
 def test_a_map_over_some_dimensions_is_seen_through_and_the_others_pass_as_observed():
