@@ -71,8 +71,10 @@ def test_a_failing_environment_keeps_the_partial_run_marked_failed(tmp_path, how
 
 def test_sighup_keeps_a_valid_partial_run(tmp_path):
     out = tmp_path / "run"
+    # As from a terminal: a suite started under nohup would hand the run SIGHUP ignored, which it keeps ignored.
     proc = subprocess.Popen(somarm_command("train", "reach2", "--steps", "50000000", "--no-figures", "--out", str(out)),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=checkout_env())
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=checkout_env(),
+                            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_DFL))
     try:
         line = proc.stderr.readline()
         assert "mean reward" in line, line + proc.stderr.read()
