@@ -164,6 +164,10 @@ def _typed(kind: str, key: str, value: Any) -> Any:
 def apply_settings(config: Any, changes: dict[str, Any]) -> Any:
     """A copy of a learner config with typed changes made in order, each checked as it is made.
 
+    A change that leaves the config inconsistent with another setting may be made good by a later change
+    (``local_linear=False`` then ``shared_slopes=False``, in either order); the error, when none does,
+    names the change after which the config never was consistent again.
+
     Args:
       config: a learner config (``SOMQConfig``, ``MotoricConfig``, ``TabularConfig``).
       changes: typed values by setting key, e.g. ``{"epsilon": 0.2, "decay": InverseDecay(1000.0),
@@ -177,6 +181,7 @@ def apply_settings(config: Any, changes: dict[str, Any]) -> Any:
     """
     cls = type(config)
     fields = {field.name: getattr(config, field.name) for field in dataclasses.fields(config)}
+    unmended = None  # the error of the change after which the config has not been consistent
     for key, value in changes.items():
         kind = _key_kind(cls, key)
         name, _, part = str(key).partition(".")
@@ -191,9 +196,15 @@ def apply_settings(config: Any, changes: dict[str, Any]) -> Any:
                 fields[name] = fields[name].with_changes(**{part: value})
             else:
                 fields[name] = value
-            cls(**fields)  # checked now, so the error names this key
         except ValueError as exc:
             raise ValueError(f"{key}={format_setting(value)}: {exc}") from None
+        try:
+            cls(**fields)  # checked now, so the error names this key
+            unmended = None
+        except ValueError as exc:
+            unmended = unmended or ValueError(f"{key}={format_setting(value)}: {exc}")
+    if unmended is not None:
+        raise unmended
     return cls(**fields)
 
 

@@ -39,7 +39,13 @@ from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import grid_coordinates, grid_offsets, winners
 from somarm.validation import check_number
 
-__all__ = ["RESPONSES", "ACTION_INITS", "SOMQConfig", "SOMQLearner", "row_width", "grid_actions"]
+__all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig", "SOMQLearner", "row_width",
+           "grid_actions", "paper_representation"]
+
+#: The settings that choose how the state is seen and Q is held and learned beyond the paper's one map
+#: (``somarm.learners.groups``); at ``SOMQConfig``'s defaults they are the paper's model.
+REPRESENTATION_SETTINGS = ("input_groups", "k_nearest", "grow_every", "local_linear", "shared_slopes",
+                           "action_factored", "action_gap")
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
@@ -227,6 +233,13 @@ def grid_actions(shape: tuple[int, ...], low: np.ndarray, high: np.ndarray, span
             for n, lo, hi in zip(shape, low, high, strict=True)]
     mesh = np.meshgrid(*axes, indexing="ij")  # row-major, as the map's grid coordinates
     return np.stack([m.ravel() for m in mesh], axis=1)
+
+
+def paper_representation() -> dict[str, object]:
+    """The ``REPRESENTATION_SETTINGS`` at the paper's values (``SOMQConfig``'s defaults): what to change a
+    preset by to see the state through one map again, whatever representation the preset holds."""
+    paper = SOMQConfig()
+    return {name: getattr(paper, name) for name in REPRESENTATION_SETTINGS}
 
 
 def row_width(config: SOMQConfig, action_dim: int) -> int:

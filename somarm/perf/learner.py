@@ -19,7 +19,7 @@ import numpy as np
 from somarm.helptext import PlainHelpFormatter
 from somarm.learners.presets import get
 from somarm.learners.reference import ReferenceSOMQ
-from somarm.learners.somq import SOMQConfig, SOMQLearner
+from somarm.learners.somq import SOMQConfig, SOMQLearner, paper_representation
 from somarm.validation import OneLineParser, check_int, check_int_list, whole_number
 
 __all__ = ["Case", "CASES", "REPRESENTATIONS", "time_batched", "time_reference", "interpolated_rows",
@@ -44,14 +44,11 @@ CASES = (
 )
 
 
-#: The input representations (``input_groups``, ``k_nearest``, ``grow_every``, ``local_linear``,
-#: ``action_factored``, ``shared_slopes``, and the learning rule ``action_gap``) at Reacher-v5's size: 10
-#: observed dimensions, a 3x3 grid of torques, the reacher preset otherwise (changes are made in order, so
-#: the preset's shared slopes and local linear units go off before a row grows its maps).
-_ONE_MAP = {"shared_slopes": False, "local_linear": False, "action_factored": False, "action_gap": 0.0,
-            "input_groups": "all", "input_shape": (20, 20), "k_nearest": 1, "grow_every": 0}
-_PAIRS = {"shared_slopes": False, "local_linear": False, "action_factored": False, "action_gap": 0.0,
-          "input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 1, "grow_every": 0}
+#: The input representations (``REPRESENTATION_SETTINGS``: ``input_groups``, ``k_nearest``, ``grow_every``,
+#: ``local_linear``, ``shared_slopes``, ``action_factored`` and the learning rule ``action_gap``) at
+#: Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
+_ONE_MAP = {**paper_representation(), "input_shape": (20, 20)}
+_PAIRS = {**_ONE_MAP, "input_groups": "pairs", "input_shape": (10, 10)}
 REPRESENTATIONS = (
     ("one 20x20 map (the paper's)", _ONE_MAP),
     ("one 20x20 map, 3 nearest", {**_ONE_MAP, "k_nearest": 3}),

@@ -29,6 +29,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from somarm.learners.somq import paper_representation
+
 __all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "REACHER_JOINT_GAINS", "REACHER_CONTROLLERS", "ENVIRONMENTS", "REPRESENTATIONS", "mean_return", "round_to",
            "cell_centre", "learned_map", "controller_map", "controller_states", "through_map", "through_representation", "inverted_pendulum", "reacher", "measure", "table"]
 
@@ -216,10 +218,8 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
 
 
 #: What every row of ``REPRESENTATIONS`` starts from (the paper's one map, whatever the preset holds), so a
-#: row is the representation its label names; changes are made in order, so the preset's shared slopes and
-#: local linear units go off before a row grows its maps.
-_PLAIN = {"shared_slopes": False, "local_linear": False, "action_factored": False, "action_gap": 0.0,
-          "input_groups": "all", "k_nearest": 1, "grow_every": 0}
+#: row is the representation its label names.
+_PLAIN = paper_representation()
 
 #: The input representations the Reacher-v5 yardsticks learn the PD law through (``somarm.learners.groups``).
 REPRESENTATIONS = (

@@ -107,3 +107,14 @@ def test_tabular_settings_go_through_the_same_parser():
             TabularConfig().with_overrides(texts)
     with pytest.raises(ValueError, match="^observation_bins must be a whole number, got 4.5$"):
         TabularConfig().with_changes({"observation_bins": 4.5})
+
+
+def test_a_change_a_later_one_makes_good_is_taken_in_either_order_and_one_never_made_good_is_named():
+    linear = SOMQConfig().with_changes({"local_linear": True, "shared_slopes": True})
+    for changes in ({"local_linear": False, "shared_slopes": False}, {"shared_slopes": False, "local_linear": False}):
+        plain = linear.with_changes(changes)
+        assert (plain.local_linear, plain.shared_slopes) == (False, False)
+    with pytest.raises(ValueError, match="^local_linear=false: shared_slopes needs local_linear=true"):
+        linear.with_changes({"local_linear": False, "gamma": 0.5})
+    with pytest.raises(ValueError, match="^gamma=2: gamma must be <= 1"):
+        linear.with_changes({"local_linear": False, "shared_slopes": False, "gamma": 2})

@@ -31,7 +31,7 @@ def test_every_representation_row_is_what_its_label_names_whatever_the_reacher_p
     rows = [({**yardsticks._PLAIN, **changes}) for _, changes in yardsticks.REPRESENTATIONS]
     rows += [changes for _, changes in bench.REPRESENTATIONS]
     for changes in rows:
-        config = preset.with_changes(changes)  # in order: each change is checked as it is made
+        config = preset.with_changes(changes)
         assert all(getattr(config, key) == value for key, value in changes.items()), changes
     plain = preset.with_changes(yardsticks._PLAIN)
     assert (plain.input_groups, plain.local_linear, plain.shared_slopes) == ("all", False, False)
