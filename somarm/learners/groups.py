@@ -134,9 +134,10 @@ def deviation(x, weights, group, mid, span, out):
 
 
 @numba.njit(cache=True, nogil=True)
-def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, values):
-    """``_summed`` with local linear units: unit u answers ``q[u, a] + slopes[u, a] . z_u`` (``deviation``;
-    ``slopes[u, 0]`` for every a where the slopes are shared, one column)."""
+def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, scale, values):
+    """``_summed`` with local linear units: unit u answers ``q[u, a] + scale slopes[u, a] . z_u`` (``deviation``;
+    ``slopes[u, 0]`` for every a where the slopes are shared, one column; ``scale`` 1, or one over the action
+    grid's axes where a factored table shares its slopes, so that the expanded sum holds them once)."""
     for a in range(q.shape[1]):
         values[a] = 0.0
     for g in range(units.shape[0]):
@@ -145,7 +146,7 @@ def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, valu
                 u = units[g, i]
                 deviation(x, weights[u], groups[g], mid, span, z)
                 for a in range(q.shape[1]):
-                    total = q[u, a] + _slope_term(slopes[u], a, z)
+                    total = q[u, a] + scale * _slope_term(slopes[u], a, z)
                     values[a] += phi[g, i] * total
 
 
@@ -157,6 +158,13 @@ def _slope_term(slopes, a, z):
     for d in range(z.shape[0]):
         total += slopes[column, d] * z[d]
     return total
+
+
+@numba.njit(cache=True, nogil=True)
+def _slope_scale(slopes, factored, action_shape):
+    """How much of a unit's slope term each table column holds: one over the grid's axes where a factored
+    table shares one slope vector (each action adds one column per axis, so the sum holds it once), else 1."""
+    return 1.0 / action_shape.shape[0] if factored and slopes.shape[1] == 1 else 1.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -180,7 +188,8 @@ def _summed_any(q, slopes, linear, units, phi, x, weights, groups, mid, span, z,
     (into ``columns``) expanded to every action unit (``expand``)."""
     out = columns if factored else values
     if linear:
-        _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, out)
+        _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z,
+                       _slope_scale(slopes, factored, action_shape), out)
     else:
         _summed(q, units, phi, out)
     if factored:
@@ -292,6 +301,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     next_phi = np.empty((n_groups, k))
     z = np.empty(observations.shape[1])
     step = alpha / n_groups if not factored else alpha / (n_groups * action_shape.shape[0])
+    scale = _slope_scale(slopes[0], factored, action_shape)
     wrapping = False
     for i in range(wrap.shape[0]):
         wrapping = wrapping or wrap[i]
@@ -322,7 +332,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     if linear:
                         deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
                         for a in range(n_columns):
-                            parts[g, a] += phi[trial, g, i] * (table[u, a] + _slope_term(slopes[trial, u], a, z))
+                            parts[g, a] += phi[trial, g, i] * (table[u, a] + scale * _slope_term(slopes[trial, u], a, z))
                         continue
                     for a in range(n_columns):
                         parts[g, a] += phi[trial, g, i] * table[u, a]
@@ -350,7 +360,8 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                 if factored:
                     _move_factored(table, slopes[trial], linear, observations[trial], input_weights[trial], groups[g],
                                    mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1],
-                                   neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, targets, values, parts[g])
+                                   neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, a_k, scale, targets,
+                                   values, parts[g])
                     continue
                 if linear:
                     _move_linear(table, slopes[trial], observations[trial], input_weights[trial], groups[g], mid, span,
@@ -479,11 +490,13 @@ def _factored_reach(a_k, action_shape, n_a, neighbourhood_q, psi_c, swap):
 
 @numba.njit(cache=True, nogil=True)
 def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q,
-                   n_s, offsets_s, rate, psi_c, swap, targets, values, parts):
+                   n_s, offsets_s, rate, psi_c, swap, a_k, scale, targets, values, parts):
     """Step 8 for one of a map's k nearest units with a factored table: each unit m within reach (``centre``
     alone without neighbourhood Q-learning) moves each column c with ``psi_c[c] > 0`` towards what the rest
     leaves of the target of the action unit ``swap[c]``, by ``rate psi_S(m) psi_c[c]`` (local linear units:
-    the normalised step of ``_move_linear``)."""
+    the normalised step of ``_move_linear``; shared slopes, ``scale`` of them in each column, move with the
+    changes of the tried unit a_k's own columns, after every column has moved)."""
+    shared = slopes.shape[1] == 1
     r0 = (centre - first) // cols
     c0 = (centre - first) - r0 * cols
     reach = int(n_s + 1.0) if neighbourhood_q else 0
@@ -493,17 +506,22 @@ def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centr
             if psi > 0.0:
                 m = first + r * cols + c
                 norm = 1.0 + deviation(x, weights[m], group, mid, span, z) if linear else 1.0
+                tried = 0.0
                 for col in range(table.shape[1]):
                     if psi_c[col] > 0.0:
                         answer = table[m, col]
                         if linear:
-                            for d in range(z.shape[0]):
-                                answer += slopes[m, col, d] * z[d]
+                            answer += scale * _slope_term(slopes[m], col, z)
                         change = rate * psi * psi_c[col] * (targets[swap[col]] - (values[swap[col]] - parts[col]) - answer) / norm
                         table[m, col] += change
-                        if linear:
+                        if linear and shared:
+                            tried += change if swap[col] == a_k else 0.0
+                        elif linear:
                             for d in range(z.shape[0]):
                                 slopes[m, col, d] += change * z[d]
+                if linear and shared:
+                    for d in range(z.shape[0]):
+                        slopes[m, 0, d] += tried * z[d]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -141,8 +141,8 @@ class SOMQConfig(ConfigBase):
     shared_slopes: bool = False
     """With ``local_linear``: one slope vector per input unit, shared by every action unit, ``q[u, a] +
     slopes[u] . z``: how the value changes round a unit is learned from every step that unit answers for,
-    whatever action was tried (a per-state baseline), and each action keeps only its constant. Not with
-    ``action_factored``."""
+    whatever action was tried (a per-state baseline), and each action keeps only its constant (with
+    ``action_factored``, each column of the factored table its constant)."""
 
     action_factored: bool = False
     """Q adds over the action grid's axes: ``Q(s, (i, j)) = Q_rows(s, i) + Q_cols(s, j)``, each map's table
@@ -193,10 +193,8 @@ class SOMQConfig(ConfigBase):
         if not isinstance(self.shared_slopes, (bool, np.bool_)):
             raise ValueError(f"shared_slopes must be true or false, got {self.shared_slopes!r}")
         object.__setattr__(self, "shared_slopes", bool(self.shared_slopes))
-        if self.shared_slopes and (not self.local_linear or self.action_factored):
-            raise ValueError("shared_slopes needs local_linear=true and action_factored=false, got "
-                             f"local_linear={str(self.local_linear).lower()}, "
-                             f"action_factored={str(self.action_factored).lower()}")
+        if self.shared_slopes and not self.local_linear:
+            raise ValueError("shared_slopes needs local_linear=true, got local_linear=false")
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")

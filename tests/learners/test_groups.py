@@ -51,7 +51,9 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
                                      {"action_gap": 0.8, "action_factored": True, "local_linear": True},
                                      {"input_groups": "pairs", "local_linear": True, "shared_slopes": True},
                                      {"input_groups": "singles", "local_linear": True, "shared_slopes": True,
-                                      "neighbourhood_q": False, "k_nearest": 2}])
+                                      "neighbourhood_q": False, "k_nearest": 2},
+                                     {"input_groups": "pairs", "local_linear": True, "shared_slopes": True,
+                                      "action_factored": True, "k_nearest": 2}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
@@ -376,8 +378,29 @@ def test_shared_slopes_learn_a_value_that_varies_within_a_unit_from_every_action
     assert abs(slope - 2.0) < 0.2, slope
 
 
-@pytest.mark.parametrize("changes", [{"shared_slopes": True}, {"shared_slopes": True, "local_linear": True,
-                                                                "action_factored": True}])
-def test_shared_slopes_without_local_linear_or_with_a_factored_table_are_refused_in_one_line(changes):
-    with pytest.raises(ValueError, match="shared_slopes needs local_linear=true and action_factored=false"):
-        SOMQConfig(**changes)
+def test_a_factored_table_with_shared_slopes_learns_each_axis_best_place_and_the_slope_once():
+    # Reward 2 x_1 (a dimension no map sees) less each torque's squared distance from its own best place
+    # (0 on the first axis, 1 on the second): one slope vector of 2 for the sum, and each axis' columns
+    # ranking its places by their own penalty alone.
+    config = SOMQConfig(input_shape=(1,), action_shape=(3, 3), action_init="grid", alpha=Schedule(0.2),
+                        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
+                        p=Schedule(1.0), epsilon=Schedule(0.0), neighbourhood_q=False, input_groups="0",
+                        local_linear=True, shared_slopes=True, action_factored=True)
+    learner = SOMQLearner(config, seed=1, observation_low=[0.0, 0.0], observation_high=[1.0, 1.0],
+                          action_low=[-1.0, -1.0], action_high=[1.0, 1.0])
+    assert learner.slopes.shape == (1, 1, 1, 2)
+    rng = np.random.default_rng(0)
+    for _ in range(4000):
+        x = rng.random((1, 2))
+        actions = learner.act(x)
+        learner.learn(2.0 * x[:, 1] - actions[:, 0] ** 2 - (actions[:, 1] - 1.0) ** 2)
+    assert abs(learner.slopes[0, 0, 0, 1] - 2.0) < 0.1, learner.slopes[0, 0, 0]
+    rows, cols = learner.q[0, 0, :3], learner.q[0, 0, 3:]
+    np.testing.assert_allclose(rows - rows[1], [-1.0, 0.0, -1.0], atol=0.1)
+    np.testing.assert_allclose(cols - cols[2], [-4.0, -1.0, 0.0], atol=0.1)
+    np.testing.assert_array_equal(learner.predict(np.array([[0.5, 0.5]])), [[0.0, 1.0]])
+
+
+def test_shared_slopes_without_local_linear_are_refused_in_one_line():
+    with pytest.raises(ValueError, match="^shared_slopes needs local_linear=true, got local_linear=false$"):
+        SOMQConfig(shared_slopes=True)
