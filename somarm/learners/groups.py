@@ -134,7 +134,7 @@ def deviation(x, weights, group, mid, span, out):
 
 
 @numba.njit(cache=True, nogil=True)
-def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, scale, values):
+def _summed_linear(q, slopes, places, units, phi, x, weights, groups, mid, span, z, scale, values):
     """``_summed`` with local linear units: unit u answers ``q[u, a] + scale slopes[u, a] . z_u`` (``deviation``;
     ``slopes[u, 0]`` for every a where the slopes are shared, one column; ``scale`` 1, or one over the action
     grid's axes where a factored table shares its slopes, so that the expanded sum holds them once)."""
@@ -146,13 +146,23 @@ def _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z, scal
                 u = units[g, i]
                 deviation(x, weights[u], groups[g], mid, span, z)
                 for a in range(q.shape[1]):
-                    total = q[u, a] + scale * _slope_term(slopes[u], a, z)
+                    total = q[u, a] + scale * _slope_term(slopes[u], a, z, places)
                     values[a] += phi[g, i] * total
 
 
 @numba.njit(cache=True, nogil=True)
-def _slope_term(slopes, a, z):
-    """``slopes[a] . z``, or ``slopes[0] . z`` where one slope vector is shared by every column."""
+def _slope_term(slopes, a, z, places):
+    """``slopes[a] . z``, or ``slopes[0] . z`` where one slope vector is shared by every column; with action
+    slopes (``places (n_actions, J)`` the action units' places in the grid's box, J > 0) ``(slopes[0] +
+    sum_j places[a, j] slopes[1 + j]) . z``."""
+    if places.shape[1] > 0:
+        total = 0.0
+        for d in range(z.shape[0]):
+            slope = slopes[0, d]
+            for j in range(places.shape[1]):
+                slope += places[a, j] * slopes[1 + j, d]
+            total += slope * z[d]
+        return total
     column = 0 if slopes.shape[0] == 1 else a
     total = 0.0
     for d in range(z.shape[0]):
@@ -182,13 +192,13 @@ def expand(columns, action_shape, values):
 
 
 @numba.njit(cache=True, nogil=True)
-def _summed_any(q, slopes, linear, units, phi, x, weights, groups, mid, span, z, factored, action_shape, columns,
-                values):
+def _summed_any(q, slopes, places, linear, units, phi, x, weights, groups, mid, span, z, factored, action_shape,
+                columns, values):
     """``_summed`` or, with ``linear``, ``_summed_linear``; with ``factored`` the sum over the table's columns
     (into ``columns``) expanded to every action unit (``expand``)."""
     out = columns if factored else values
     if linear:
-        _summed_linear(q, slopes, units, phi, x, weights, groups, mid, span, z,
+        _summed_linear(q, slopes, places, units, phi, x, weights, groups, mid, span, z,
                        _slope_scale(slopes, factored, action_shape), out)
     else:
         _summed(q, units, phi, out)
@@ -241,11 +251,13 @@ def _greedy(values, tie):
 
 
 @numba.njit(cache=True, nogil=True)
-def act_kernel(observations, input_weights, action_weights, q, slopes, linear, factored, mid, span, groups, shapes, k,
+def act_kernel(observations, input_weights, action_weights, q, slopes, places, linear, factored, mid, span, groups,
+               shapes, k,
                rows, p, epsilon, low, high, wrap, gaussian, interpolated, action_shape, units, phi, chosen, actions):
     """Steps 1 to 5 for every trial: fills ``units``/``phi`` ``(n_trials, G, k)``, ``chosen`` ``(n_trials,)``
     and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring; ``slopes``
-    ``(n_trials, G * n_units, n_action_units, obs_dim)`` read only with ``linear``)."""
+    ``(n_trials, G * n_units, columns, obs_dim)`` and ``places (n_trials, n_action_units, J)`` read only with
+    ``linear``)."""
     n_a = action_weights.shape[1]
     values = np.empty(n_a)
     columns = np.empty(q.shape[2])
@@ -260,7 +272,7 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, linear, f
         if exploring:
             unit = min(int(row[1] * n_a), n_a - 1)
         else:
-            _summed_any(q[trial], slopes[trial], linear, units[trial], phi[trial], observations[trial],
+            _summed_any(q[trial], slopes[trial], places[trial], linear, units[trial], phi[trial], observations[trial],
                         input_weights[trial], groups, mid, span, z, factored, action_shape, columns, values)
             unit = _greedy(values, row[2])
         out = actions[trial]
@@ -276,7 +288,8 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, linear, f
 
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
-                 input_weights, action_weights, q, slopes, linear, factored, action_shape, mid, span, groups, shapes, k,
+                 input_weights, action_weights, q, slopes, places, linear, factored, action_shape, mid, span, groups,
+                 shapes, k,
                  alpha, lambda_s, lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors,
                  grow_now, gap):
     """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring;
@@ -312,7 +325,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
         if bootstrap[trial]:
             features(next_observations[trial], input_weights[trial], groups, shapes[trial], k, next_units, next_phi, part, order,
                      squared)
-            _summed_any(table, slopes[trial], linear, next_units, next_phi, next_observations[trial],
+            _summed_any(table, slopes[trial], places[trial], linear, next_units, next_phi, next_observations[trial],
                         input_weights[trial], groups, mid, span, z, factored, action_shape, columns, values)
             top = values[0]
             for a in range(1, n_actions):
@@ -332,7 +345,8 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     if linear:
                         deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
                         for a in range(n_columns):
-                            parts[g, a] += phi[trial, g, i] * (table[u, a] + scale * _slope_term(slopes[trial, u], a, z))
+                            parts[g, a] += phi[trial, g, i] * (table[u, a] + scale * _slope_term(slopes[trial, u], a, z,
+                                                                                                  places[trial]))
                         continue
                     for a in range(n_columns):
                         parts[g, a] += phi[trial, g, i] * table[u, a]
@@ -358,13 +372,15 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     continue
                 centre = units[trial, g, i]
                 if factored:
-                    _move_factored(table, slopes[trial], linear, observations[trial], input_weights[trial], groups[g],
+                    _move_factored(table, slopes[trial], places[trial], linear, observations[trial], input_weights[trial],
+                                   groups[g],
                                    mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1],
                                    neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, a_k, scale, targets,
                                    values, parts[g])
                     continue
                 if linear:
-                    _move_linear(table, slopes[trial], observations[trial], input_weights[trial], groups[g], mid, span,
+                    _move_linear(table, slopes[trial], places[trial], observations[trial], input_weights[trial], groups[g],
+                                 mid, span,
                                  z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1], neighbourhood_q, n_s,
                                  offsets_s, step * weight, psi_a, a_k, targets, values, parts[g])
                     continue
@@ -425,22 +441,25 @@ def _gap_targets(target, gap, values, targets):
 
 
 @numba.njit(cache=True, nogil=True)
-def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q, n_s,
-                 offsets_s, rate, psi_a, a_k, targets, values, parts):
+def _move_linear(table, slopes, places, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q,
+                 n_s, offsets_s, rate, psi_a, a_k, targets, values, parts):
     """Step 8 for one of a map's k nearest units (``centre``, its weight folded into ``rate``) when units are
     local linear: each unit m within reach moves its constant and slopes by ``rate psi_S(m) psi_A(a) e z /
     (1 + |z|^2)``, ``e`` the error of its own answer at x (``target`` less the other maps' part less
     ``q[m, a] + slopes[m, a] . z``), so that answer moves by the step a constant unit's value would. Shared
-    slopes (one column) move with the tried unit a_k's change alone, after every constant has moved."""
-    shared = slopes.shape[1] == 1
+    slopes (one column, or with action slopes one per action axis beside it) move with the tried unit a_k's
+    change alone, after every constant has moved (``_move_shared``)."""
+    shared = slopes.shape[1] == 1 or places.shape[1] > 0
     if not neighbourhood_q:
-        norm = 1.0 + deviation(x, weights[centre], group, mid, span, z)
-        answer = table[centre, a_k] + _slope_term(slopes[centre], a_k, z)
+        norm = _norm(deviation(x, weights[centre], group, mid, span, z), places, a_k)
+        answer = table[centre, a_k] + _slope_term(slopes[centre], a_k, z, places)
         change = rate * (targets[a_k] - (values[a_k] - parts[a_k]) - answer) / norm
         table[centre, a_k] += change
-        column = 0 if shared else a_k
+        if shared:
+            _move_shared(slopes[centre], change, z, places, a_k)
+            return
         for d in range(z.shape[0]):
-            slopes[centre, column, d] += change * z[d]
+            slopes[centre, a_k, d] += change * z[d]
         return
     r0 = (centre - first) // cols
     c0 = (centre - first) - r0 * cols
@@ -450,11 +469,11 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
             psi = max(0.0, 1.0 - offsets_s[abs(r - r0), abs(c - c0)] / (n_s + 1.0))
             if psi > 0.0:
                 m = first + r * cols + c
-                norm = 1.0 + deviation(x, weights[m], group, mid, span, z)
+                norm = _norm(deviation(x, weights[m], group, mid, span, z), places, a_k)
                 tried = 0.0
                 for a in range(table.shape[1]):
                     if psi_a[a] > 0.0:
-                        answer = table[m, a] + _slope_term(slopes[m], a, z)
+                        answer = table[m, a] + _slope_term(slopes[m], a, z, places)
                         change = rate * psi * psi_a[a] * (targets[a] - (values[a] - parts[a]) - answer) / norm
                         table[m, a] += change
                         if shared:
@@ -463,8 +482,28 @@ def _move_linear(table, slopes, x, weights, group, mid, span, z, centre, first, 
                         for d in range(z.shape[0]):
                             slopes[m, a, d] += change * z[d]
                 if shared:
-                    for d in range(z.shape[0]):
-                        slopes[m, 0, d] += tried * z[d]
+                    _move_shared(slopes[m], tried, z, places, a_k)
+
+
+@numba.njit(cache=True, nogil=True)
+def _norm(squared, places, a_k):
+    """The normalising ``1 + |features|^2`` of a local linear unit's answer for the tried unit a_k: ``1 + |z|^2``,
+    and with action slopes ``1 + |z|^2 (1 + |places[a_k]|^2)`` (the action slopes' features are
+    ``places[a_k, j] z``)."""
+    extra = 0.0
+    for j in range(places.shape[1]):
+        extra += places[a_k, j] * places[a_k, j]
+    return 1.0 + squared * (1.0 + extra)
+
+
+@numba.njit(cache=True, nogil=True)
+def _move_shared(slopes, change, z, places, a_k):
+    """A unit's shared slopes after its tried constant moved by ``change``: ``slopes[0] += change z``, and with
+    action slopes ``slopes[1 + j] += change places[a_k, j] z``."""
+    for d in range(z.shape[0]):
+        slopes[0, d] += change * z[d]
+        for j in range(places.shape[1]):
+            slopes[1 + j, d] += change * places[a_k, j] * z[d]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -489,8 +528,8 @@ def _factored_reach(a_k, action_shape, n_a, neighbourhood_q, psi_c, swap):
 
 
 @numba.njit(cache=True, nogil=True)
-def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centre, first, rows, cols, neighbourhood_q,
-                   n_s, offsets_s, rate, psi_c, swap, a_k, scale, targets, values, parts):
+def _move_factored(table, slopes, places, linear, x, weights, group, mid, span, z, centre, first, rows, cols,
+                   neighbourhood_q, n_s, offsets_s, rate, psi_c, swap, a_k, scale, targets, values, parts):
     """Step 8 for one of a map's k nearest units with a factored table: each unit m within reach (``centre``
     alone without neighbourhood Q-learning) moves each column c with ``psi_c[c] > 0`` towards what the rest
     leaves of the target of the action unit ``swap[c]``, by ``rate psi_S(m) psi_c[c]`` (local linear units:
@@ -511,7 +550,7 @@ def _move_factored(table, slopes, linear, x, weights, group, mid, span, z, centr
                     if psi_c[col] > 0.0:
                         answer = table[m, col]
                         if linear:
-                            answer += scale * _slope_term(slopes[m], col, z)
+                            answer += scale * _slope_term(slopes[m], col, z, places)
                         change = rate * psi * psi_c[col] * (targets[swap[col]] - (values[swap[col]] - parts[col]) - answer) / norm
                         table[m, col] += change
                         if linear and shared:
@@ -533,26 +572,27 @@ def _scratch(n_groups, width, k, n_actions, obs_dim, n_columns):
 
 
 @numba.njit(cache=True, nogil=True)
-def _greedy_of(x, input_weights, q, slopes, linear, factored, action_shape, mid, span, groups, shapes, k, scratch):
+def _greedy_of(x, input_weights, q, slopes, places, linear, factored, action_shape, mid, span, groups, shapes, k,
+               scratch):
     """The greedy action unit of one observation (ties to the lowest index); leaves the summed Q in
     ``scratch[0]`` and each map's nearest units in ``scratch[4]``."""
     values, part, order, squared, units, phi, z, columns = scratch
     features(x, input_weights, groups, shapes, k, units, phi, part, order, squared)
-    _summed_any(q, slopes, linear, units, phi, x, input_weights, groups, mid, span, z, factored, action_shape, columns,
-                values)
+    _summed_any(q, slopes, places, linear, units, phi, x, input_weights, groups, mid, span, z, factored, action_shape,
+                columns, values)
     return _greedy(values, -1.0)
 
 
 @numba.njit(cache=True, nogil=True)
-def predict_kernel(observations, input_weights, action_weights, q, slopes, linear, factored, mid, span, groups, shapes,
-                   k, interpolated, action_shape, low, high, wrap, out):
+def predict_kernel(observations, input_weights, action_weights, q, slopes, places, linear, factored, mid, span, groups,
+                   shapes, k, interpolated, action_shape, low, high, wrap, out):
     """Greedy actions of ``observations (n_trials, n_obs, obs_dim)`` into ``out (n_trials, n_obs, action_dim)``:
     the best summed Q, ties to the lowest index, the parabola's shift with the interpolated response."""
     scratch = _scratch(groups.shape[0], groups.shape[1], k, action_weights.shape[1], observations.shape[2], q.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
-            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial], linear, factored,
-                              action_shape, mid, span, groups, shapes[trial], k, scratch)
+            unit = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial], places[trial], linear,
+                              factored, action_shape, mid, span, groups, shapes[trial], k, scratch)
             action = out[trial, n]
             for i in range(action.shape[0]):
                 action[i] = action_weights[trial, unit, i]
@@ -564,13 +604,14 @@ def predict_kernel(observations, input_weights, action_weights, q, slopes, linea
 
 
 @numba.njit(cache=True, nogil=True)
-def greedy_kernel(observations, input_weights, q, slopes, linear, factored, action_shape, n_actions, mid, span, groups,
-                  shapes, k, units_out, first_out):
+def greedy_kernel(observations, input_weights, q, slopes, places, linear, factored, action_shape, n_actions, mid, span,
+                  groups, shapes, k, units_out, first_out):
     """The greedy action unit (ties to the lowest index) and the first map's nearest unit of
     ``observations (n_trials, n_obs, obs_dim)``, into ``units_out``/``first_out`` ``(n_trials, n_obs)``."""
     scratch = _scratch(groups.shape[0], groups.shape[1], k, n_actions, observations.shape[2], q.shape[2])
     for trial in range(observations.shape[0]):
         for n in range(observations.shape[1]):
             units_out[trial, n] = _greedy_of(observations[trial, n], input_weights[trial], q[trial], slopes[trial],
-                                             linear, factored, action_shape, mid, span, groups, shapes[trial], k, scratch)
+                                             places[trial], linear, factored, action_shape, mid, span, groups,
+                                             shapes[trial], k, scratch)
             first_out[trial, n] = scratch[4][0, 0]

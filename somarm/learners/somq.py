@@ -45,7 +45,7 @@ __all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig",
 #: The settings that choose how the state is seen and Q is held and learned beyond the paper's one map
 #: (``somarm.learners.groups``); at ``SOMQConfig``'s defaults they are the paper's model.
 REPRESENTATION_SETTINGS = ("input_groups", "k_nearest", "grow_every", "local_linear", "shared_slopes",
-                           "action_factored", "action_gap")
+                           "action_slopes", "action_factored", "action_gap")
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
@@ -144,6 +144,15 @@ class SOMQConfig(ConfigBase):
     whatever action was tried (a per-state baseline), and each action keeps only its constant (with
     ``action_factored``, each column of the factored table its constant)."""
 
+    action_slopes: bool = False
+    """With ``shared_slopes``: each unit's shared slope vector also changes linearly with the action unit's
+    place, ``q[u, a] + (slopes[u, 0] + sum_j p_aj slopes[u, 1 + j]) . z``, ``p_a`` the action unit's weights
+    over the grid's half-width round the box's middle (-1 to 1 across a grid that spans ``grid_span`` of the
+    box). Each unit then holds a local linear policy beside its local linear value: which action is best
+    changes with the observation within the unit's cell, so the greedy action follows the state more finely
+    than the units lie.
+    Every slope learns from every step, as the shared ones do. Not with ``action_factored``."""
+
     action_factored: bool = False
     """Q adds over the action grid's axes: ``Q(s, (i, j)) = Q_rows(s, i) + Q_cols(s, j)``, each map's table
     holding a column per row and per column of the action grid (3 + 3 for a 3x3 grid, not 9), so with
@@ -195,6 +204,14 @@ class SOMQConfig(ConfigBase):
         object.__setattr__(self, "shared_slopes", bool(self.shared_slopes))
         if self.shared_slopes and not self.local_linear:
             raise ValueError("shared_slopes needs local_linear=true, got local_linear=false")
+        if not isinstance(self.action_slopes, (bool, np.bool_)):
+            raise ValueError(f"action_slopes must be true or false, got {self.action_slopes!r}")
+        object.__setattr__(self, "action_slopes", bool(self.action_slopes))
+        if self.action_slopes and not self.shared_slopes:
+            raise ValueError("action_slopes needs shared_slopes=true, got shared_slopes=false")
+        if self.action_slopes and self.action_factored:
+            raise ValueError("action_slopes needs a table column per action unit: it needs action_factored=false, "
+                             "got action_factored=true")
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -204,6 +221,13 @@ class SOMQConfig(ConfigBase):
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
         return (self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
                 or self.action_factored or self.action_gap > 0.0)
+
+    def slope_rows(self, action_dim: int) -> int:
+        """Slope vectors per input unit with ``local_linear``: one per table column, one where shared, and one
+        per action dimension beside it with ``action_slopes``."""
+        if not self.shared_slopes:
+            return self.table_columns
+        return 1 + action_dim if self.action_slopes else 1
 
     @property
     def table_columns(self) -> int:
@@ -283,7 +307,7 @@ class SOMQLearner(MapLearner):
             n_c = config.table_columns
             n_floats += n_trials * (n_maps * n_s * (width + n_c + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
             if config.local_linear:  # a slope per unit, table column (one where shared) and observed dimension
-                n_floats += n_trials * n_maps * n_s * (1 if config.shared_slopes else n_c) * size
+                n_floats += n_trials * n_maps * n_s * config.slope_rows(action_dim) * size
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -310,10 +334,11 @@ class SOMQLearner(MapLearner):
             self._shapes = np.tile(np.array(start, dtype=np.int64), (self.n_trials, n_maps, 1))
             self._errors = np.zeros((self.n_trials, n_maps * n_s))
             width = self.obs_dim if cfg.local_linear else 1
-            columns = cfg.table_columns if cfg.local_linear and not cfg.shared_slopes else 1
+            columns = cfg.slope_rows(self.action_dim) if cfg.local_linear else 1
             self.slopes = np.zeros((self.n_trials, n_maps * n_s if cfg.local_linear else 1, columns, width))
             self._mid = (self.observation_low + self.observation_high) / 2.0
             self._span = self.observation_high - self.observation_low
+            self._places = np.zeros((self.n_trials, n_a, self.action_dim if cfg.action_slopes else 0))
             # No one input map of (n_units, obs_dim) units to draw: figures and views of a map skip it.
             self.has_maps = False
         else:
@@ -397,7 +422,8 @@ class SOMQLearner(MapLearner):
         if self.config.grouped:
             groups.act_kernel(
                 self._observations, self.input_weights, self.action_weights, self.q, self.slopes,
-                self.config.local_linear, self.config.action_factored, self._mid, self._span, self._groups,
+                self._action_places(), self.config.local_linear, self.config.action_factored, self._mid, self._span,
+                self._groups,
                 self._shapes, self.config.k_nearest, rows, values["p"], self._epsilons(values["epsilon"]), self.action_low,
                 self.action_high, self._wrap, self.config.noise == "gaussian", self._interpolated,
                 self._action_grid_shape, self._group_units, self._phi, self._units, self._actions,
@@ -442,7 +468,7 @@ class SOMQLearner(MapLearner):
             groups.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
                 self._units, self._actions, self.input_weights, self.action_weights, self.q, self.slopes,
-                self.config.local_linear, self.config.action_factored, self._action_grid_shape, self._mid, self._span,
+                self._action_places(), self.config.local_linear, self.config.action_factored, self._action_grid_shape, self._mid, self._span,
                 self._groups,
                 self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
                 values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
@@ -493,7 +519,7 @@ class SOMQLearner(MapLearner):
             many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self.slopes,
-                                  self.config.local_linear, self.config.action_factored, self._mid, self._span,
+                                  self._action_places(), self.config.local_linear, self.config.action_factored, self._mid, self._span,
                                   self._groups,
                                   self._shapes, self.config.k_nearest, self._interpolated, self._action_grid_shape,
                                   self.action_low, self.action_high, self._wrap, out)
@@ -510,12 +536,23 @@ class SOMQLearner(MapLearner):
         index = np.arange(self.n_trials).reshape((-1,) + (1,) * (units.ndim - 1))
         return self.action_weights[index, units]
 
+    def _action_places(self) -> np.ndarray:
+        """Each action unit's place for ``action_slopes``, ``(n_trials, n_action_units, action_dim)``: its
+        weights less the box's middle, over the half-width of the grid (``grid_span`` of the box); with no
+        action slopes ``(n_trials, n_action_units, 0)``."""
+        if self._places.shape[2]:
+            middle = (self.action_high + self.action_low) / 2.0
+            half = self.config.grid_span * (self.action_high - self.action_low) / 2.0
+            np.divide(self.action_weights - middle, half, out=self._places)
+        return self._places
+
     def _grouped_greedy(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Grouped maps: the greedy action unit and the first map's nearest unit of each observation."""
         many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
         units = np.empty(many.shape[:2], dtype=np.int64)
         first = np.empty(many.shape[:2], dtype=np.int64)
-        groups.greedy_kernel(many, self.input_weights, self.q, self.slopes, self.config.local_linear,
+        groups.greedy_kernel(many, self.input_weights, self.q, self.slopes, self._action_places(),
+                             self.config.local_linear,
                              self.config.action_factored, self._action_grid_shape, self.action_weights.shape[1],
                              self._mid, self._span, self._groups, self._shapes, self.config.k_nearest, units, first)
         return units.reshape(x.shape[:-1]), first.reshape(x.shape[:-1])

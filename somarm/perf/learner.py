@@ -45,7 +45,7 @@ CASES = (
 
 
 #: The input representations (``REPRESENTATION_SETTINGS``: ``input_groups``, ``k_nearest``, ``grow_every``,
-#: ``local_linear``, ``shared_slopes``, ``action_factored`` and the learning rule ``action_gap``) at
+#: ``local_linear``, ``shared_slopes``, ``action_slopes``, ``action_factored`` and the learning rule ``action_gap``) at
 #: Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
 _ONE_MAP = {**paper_representation(), "input_shape": (20, 20)}
 _PAIRS = {**_ONE_MAP, "input_groups": "pairs", "input_shape": (10, 10)}
@@ -61,6 +61,8 @@ REPRESENTATIONS = (
     ("45 pairs 10x10, 3 nearest, linear", {**_PAIRS, "k_nearest": 3, "local_linear": True}),
     ("45 pairs 5x5, 3 nearest, linear", {**_PAIRS, "input_shape": (5, 5), "k_nearest": 3, "local_linear": True}),
     ("45 pairs 10x10, 3 nearest, shared", {**_PAIRS, "k_nearest": 3, "local_linear": True, "shared_slopes": True}),
+    ("45 pairs, 3 nearest, action slopes", {**_PAIRS, "k_nearest": 3, "local_linear": True,
+                                            "shared_slopes": True, "action_slopes": True}),
     ("45 pairs 10x10, 3 nearest, factored", {**_PAIRS, "k_nearest": 3, "action_factored": True}),
     ("45 pairs 10x10, 3 nearest, gap 0.5", {**_PAIRS, "k_nearest": 3, "action_gap": 0.5}),
     ("one 20x20 map, action_gap 0.5", {**_ONE_MAP, "action_gap": 0.5}),

@@ -232,6 +232,10 @@ REPRESENTATIONS = (
     ("45 pair maps of 10x10, their 3 nearest units, local linear units with one slope vector per unit "
      "(local_linear, shared_slopes: the reacher preset's)",
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "local_linear": True, "shared_slopes": True}),
+    ("45 pair maps of 10x10, their 3 nearest units, local linear units with one slope vector per unit and one per "
+     "torque axis (local_linear, shared_slopes, action_slopes)",
+     {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "local_linear": True, "shared_slopes": True,
+      "action_slopes": True}),
     ("45 pair maps growing to 10x10 (a row or column every 1,000 steps), their 3 nearest units",
      {"input_groups": "pairs", "input_shape": (10, 10), "k_nearest": 3, "grow_every": 1000}),
     ("45 pair maps of 10x10, their 3 nearest units, Q adding over the torque grid's axes (action_factored)",

@@ -53,7 +53,11 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
                                      {"input_groups": "singles", "local_linear": True, "shared_slopes": True,
                                       "neighbourhood_q": False, "k_nearest": 2},
                                      {"input_groups": "pairs", "local_linear": True, "shared_slopes": True,
-                                      "action_factored": True, "k_nearest": 2}])
+                                      "action_factored": True, "k_nearest": 2},
+                                     {"input_groups": "pairs", "local_linear": True, "shared_slopes": True,
+                                      "action_slopes": True, "k_nearest": 2},
+                                     {"input_groups": "singles", "local_linear": True, "shared_slopes": True,
+                                      "action_slopes": True, "neighbourhood_q": False, "response": "interpolated"}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
     config = small_config((3, 3), True, 0.5).with_changes(changes)
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
@@ -404,3 +408,39 @@ def test_a_factored_table_with_shared_slopes_learns_each_axis_best_place_and_the
 def test_shared_slopes_without_local_linear_are_refused_in_one_line():
     with pytest.raises(ValueError, match="^shared_slopes needs local_linear=true, got local_linear=false$"):
         SOMQConfig(shared_slopes=True)
+
+
+def test_action_slopes_learn_a_best_action_that_changes_within_one_unit():
+    # One unit over dimension 0 only; the reward 2 a (x_1 - 1/2) favours a = +1 above x_1 = 1/2 and a = -1
+    # below it, in a dimension no map sees. Its value is linear in the action's place times x_1: the action
+    # slope along x_1 learns 2, and the greedy action follows x_1 where one value per action could not.
+    config = SOMQConfig(input_shape=(1,), action_shape=(3,), action_init="grid", alpha=Schedule(0.2),
+                        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
+                        p=Schedule(1.0), epsilon=Schedule(0.0), neighbourhood_q=False, input_groups="0",
+                        local_linear=True, shared_slopes=True, action_slopes=True)
+    box = dict(observation_low=[0.0, 0.0], observation_high=[1.0, 1.0], action_low=[-1.0], action_high=[1.0])
+    learner = SOMQLearner(config, seed=1, **box)
+    plain = SOMQLearner(config.with_changes({"action_slopes": False}), seed=1, **box)
+    assert learner.slopes.shape == (1, 1, 2, 2)
+    rng = np.random.default_rng(0)
+    for _ in range(4000):
+        x = rng.random((1, 2))
+        for one in (learner, plain):
+            actions = one.act(x)
+            one.learn(2.0 * actions[:, 0] * (x[:, 1] - 0.5))
+    assert abs(learner.slopes[0, 0, 1, 1] - 2.0) < 0.1, learner.slopes[0, 0]
+    np.testing.assert_allclose(learner.slopes[0, 0, 0], 0.0, atol=0.1)
+    x = np.array([[[0.5, 0.1], [0.5, 0.4], [0.5, 0.6], [0.5, 0.9]]])
+    np.testing.assert_array_equal(learner.predict(x)[0, :, 0], [-1.0, -1.0, 1.0, 1.0])
+    assert len(set(plain.predict(x)[0, :, 0])) == 1
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"local_linear": True, "action_slopes": True},
+     "^action_slopes needs shared_slopes=true, got shared_slopes=false$"),
+    ({"local_linear": True, "shared_slopes": True, "action_slopes": True, "action_factored": True},
+     "^action_slopes needs a table column per action unit: it needs action_factored=false, got action_factored=true$"),
+])
+def test_action_slopes_without_shared_slopes_or_with_a_factored_table_are_refused_in_one_line(changes, message):
+    with pytest.raises(ValueError, match=message):
+        SOMQConfig(**changes)
