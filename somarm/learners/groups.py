@@ -151,6 +151,13 @@ def _summed_linear(q, slopes, places, units, phi, x, weights, groups, mid, span,
 
 
 @numba.njit(cache=True, nogil=True)
+def _shared(slopes, places):
+    """Whether a unit's slopes ``(rows, obs_dim)`` are shared by every column: one row, or with action slopes
+    (``places`` with columns) one row beside one per action axis."""
+    return slopes.shape[0] == 1 or places.shape[1] > 0
+
+
+@numba.njit(cache=True, nogil=True)
 def _slope_term(slopes, a, z, places):
     """``slopes[a] . z``, or ``slopes[0] . z`` where one slope vector is shared by every column; with action
     slopes (``places (n_actions, J)`` the action units' places in the grid's box, J > 0) ``(slopes[0] +
@@ -171,10 +178,11 @@ def _slope_term(slopes, a, z, places):
 
 
 @numba.njit(cache=True, nogil=True)
-def _slope_scale(slopes, factored, action_shape):
+def _slope_scale(slopes, places, factored, action_shape):
     """How much of a unit's slope term each table column holds: one over the grid's axes where a factored
-    table shares one slope vector (each action adds one column per axis, so the sum holds it once), else 1."""
-    return 1.0 / action_shape.shape[0] if factored and slopes.shape[1] == 1 else 1.0
+    table shares one slope vector (each action adds one column per axis, so the sum holds it once), else 1
+    (``slopes`` one trial's, ``(units, rows, obs_dim)``)."""
+    return 1.0 / action_shape.shape[0] if factored and _shared(slopes[0], places) else 1.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -199,7 +207,7 @@ def _summed_any(q, slopes, places, linear, units, phi, x, weights, groups, mid, 
     out = columns if factored else values
     if linear:
         _summed_linear(q, slopes, places, units, phi, x, weights, groups, mid, span, z,
-                       _slope_scale(slopes, factored, action_shape), out)
+                       _slope_scale(slopes, places, factored, action_shape), out)
     else:
         _summed(q, units, phi, out)
     if factored:
@@ -252,8 +260,7 @@ def _greedy(values, tie):
 
 @numba.njit(cache=True, nogil=True)
 def act_kernel(observations, input_weights, action_weights, q, slopes, places, linear, factored, mid, span, groups,
-               shapes, k,
-               rows, p, epsilon, low, high, wrap, gaussian, interpolated, action_shape, units, phi, chosen, actions):
+               shapes, k, rows, p, epsilon, low, high, wrap, gaussian, interpolated, action_shape, units, phi, chosen, actions):
     """Steps 1 to 5 for every trial: fills ``units``/``phi`` ``(n_trials, G, k)``, ``chosen`` ``(n_trials,)``
     and ``actions`` ``(n_trials, action_dim)`` in place (shapes as the module docstring; ``slopes``
     ``(n_trials, G * n_units, columns, obs_dim)`` and ``places (n_trials, n_action_units, J)`` read only with
@@ -289,8 +296,7 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, places, l
 @numba.njit(cache=True, nogil=True)
 def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
                  input_weights, action_weights, q, slopes, places, linear, factored, action_shape, mid, span, groups,
-                 shapes, k,
-                 alpha, lambda_s, lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors,
+                 shapes, k, alpha, lambda_s, lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors,
                  grow_now, gap):
     """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring;
     with ``linear`` each moved unit's constant and slopes take the normalised step of its own answer; with
@@ -314,7 +320,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     next_phi = np.empty((n_groups, k))
     z = np.empty(observations.shape[1])
     step = alpha / n_groups if not factored else alpha / (n_groups * action_shape.shape[0])
-    scale = _slope_scale(slopes[0], factored, action_shape)
+    scale = _slope_scale(slopes[0], places[0], factored, action_shape)
     wrapping = False
     for i in range(wrap.shape[0]):
         wrapping = wrapping or wrap[i]
@@ -373,15 +379,13 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                 centre = units[trial, g, i]
                 if factored:
                     _move_factored(table, slopes[trial], places[trial], linear, observations[trial], input_weights[trial],
-                                   groups[g],
-                                   mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1],
+                                   groups[g], mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1],
                                    neighbourhood_q, n_s, offsets_s, step * weight, psi_c, swap, a_k, scale, targets,
                                    values, parts[g])
                     continue
                 if linear:
                     _move_linear(table, slopes[trial], places[trial], observations[trial], input_weights[trial], groups[g],
-                                 mid, span,
-                                 z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1], neighbourhood_q, n_s,
+                                 mid, span, z, centre, first, shapes[trial, g, 0], shapes[trial, g, 1], neighbourhood_q, n_s,
                                  offsets_s, step * weight, psi_a, a_k, targets, values, parts[g])
                     continue
                 if not neighbourhood_q:
@@ -449,7 +453,7 @@ def _move_linear(table, slopes, places, x, weights, group, mid, span, z, centre,
     ``q[m, a] + slopes[m, a] . z``), so that answer moves by the step a constant unit's value would. Shared
     slopes (one column, or with action slopes one per action axis beside it) move with the tried unit a_k's
     change alone, after every constant has moved (``_move_shared``)."""
-    shared = slopes.shape[1] == 1 or places.shape[1] > 0
+    shared = _shared(slopes[0], places)
     if not neighbourhood_q:
         norm = _norm(deviation(x, weights[centre], group, mid, span, z), places, a_k)
         answer = table[centre, a_k] + _slope_term(slopes[centre], a_k, z, places)
@@ -535,7 +539,7 @@ def _move_factored(table, slopes, places, linear, x, weights, group, mid, span, 
     leaves of the target of the action unit ``swap[c]``, by ``rate psi_S(m) psi_c[c]`` (local linear units:
     the normalised step of ``_move_linear``; shared slopes, ``scale`` of them in each column, move with the
     changes of the tried unit a_k's own columns, after every column has moved)."""
-    shared = slopes.shape[1] == 1
+    shared = _shared(slopes[0], places)
     r0 = (centre - first) // cols
     c0 = (centre - first) - r0 * cols
     reach = int(n_s + 1.0) if neighbourhood_q else 0
@@ -559,8 +563,7 @@ def _move_factored(table, slopes, places, linear, x, weights, group, mid, span, 
                             for d in range(z.shape[0]):
                                 slopes[m, col, d] += change * z[d]
                 if linear and shared:
-                    for d in range(z.shape[0]):
-                        slopes[m, 0, d] += tried * z[d]
+                    _move_shared(slopes[m], tried, z, places, a_k)
 
 
 @numba.njit(cache=True, nogil=True)

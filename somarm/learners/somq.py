@@ -150,8 +150,8 @@ class SOMQConfig(ConfigBase):
     over the grid's half-width round the box's middle (-1 to 1 across a grid that spans ``grid_span`` of the
     box). Each unit then holds a local linear policy beside its local linear value: which action is best
     changes with the observation within the unit's cell, so the greedy action follows the state more finely
-    than the units lie.
-    Every slope learns from every step, as the shared ones do. Not with ``action_factored``."""
+    than the units lie. Every slope learns from every step, as the shared ones do. Not with
+    ``action_factored``."""
 
     action_factored: bool = False
     """Q adds over the action grid's axes: ``Q(s, (i, j)) = Q_rows(s, i) + Q_cols(s, j)``, each map's table
@@ -339,6 +339,8 @@ class SOMQLearner(MapLearner):
             self._mid = (self.observation_low + self.observation_high) / 2.0
             self._span = self.observation_high - self.observation_low
             self._places = np.zeros((self.n_trials, n_a, self.action_dim if cfg.action_slopes else 0))
+            self._places_middle = (self.action_high + self.action_low) / 2.0
+            self._places_half = cfg.grid_span * (self.action_high - self.action_low) / 2.0
             # No one input map of (n_units, obs_dim) units to draw: figures and views of a map skip it.
             self.has_maps = False
         else:
@@ -468,8 +470,8 @@ class SOMQLearner(MapLearner):
             groups.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
                 self._units, self._actions, self.input_weights, self.action_weights, self.q, self.slopes,
-                self._action_places(), self.config.local_linear, self.config.action_factored, self._action_grid_shape, self._mid, self._span,
-                self._groups,
+                self._action_places(), self.config.local_linear, self.config.action_factored, self._action_grid_shape,
+                self._mid, self._span, self._groups,
                 self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
                 values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
                 self.action_high, self._wrap, self._errors,
@@ -519,8 +521,8 @@ class SOMQLearner(MapLearner):
             many = np.ascontiguousarray(x.reshape(self.n_trials, -1, self.obs_dim))
             out = np.empty((self.n_trials, many.shape[1], self.action_dim))
             groups.predict_kernel(many, self.input_weights, self.action_weights, self.q, self.slopes,
-                                  self._action_places(), self.config.local_linear, self.config.action_factored, self._mid, self._span,
-                                  self._groups,
+                                  self._action_places(), self.config.local_linear, self.config.action_factored,
+                                  self._mid, self._span, self._groups,
                                   self._shapes, self.config.k_nearest, self._interpolated, self._action_grid_shape,
                                   self.action_low, self.action_high, self._wrap, out)
             return out.reshape(x.shape[:-1] + (self.action_dim,))
@@ -541,9 +543,8 @@ class SOMQLearner(MapLearner):
         weights less the box's middle, over the half-width of the grid (``grid_span`` of the box); with no
         action slopes ``(n_trials, n_action_units, 0)``."""
         if self._places.shape[2]:
-            middle = (self.action_high + self.action_low) / 2.0
-            half = self.config.grid_span * (self.action_high - self.action_low) / 2.0
-            np.divide(self.action_weights - middle, half, out=self._places)
+            np.subtract(self.action_weights, self._places_middle, out=self._places)
+            self._places /= self._places_half
         return self._places
 
     def _grouped_greedy(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -552,7 +553,6 @@ class SOMQLearner(MapLearner):
         units = np.empty(many.shape[:2], dtype=np.int64)
         first = np.empty(many.shape[:2], dtype=np.int64)
         groups.greedy_kernel(many, self.input_weights, self.q, self.slopes, self._action_places(),
-                             self.config.local_linear,
-                             self.config.action_factored, self._action_grid_shape, self.action_weights.shape[1],
+                             self.config.local_linear, self.config.action_factored, self._action_grid_shape, self.action_weights.shape[1],
                              self._mid, self._span, self._groups, self._shapes, self.config.k_nearest, units, first)
         return units.reshape(x.shape[:-1]), first.reshape(x.shape[:-1])
