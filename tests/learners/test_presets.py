@@ -199,7 +199,7 @@ def test_a_preset_asks_its_own_task_alone_for_its_scaling_as_a_copy():
     asked["observation_widened"]["0"] = 1.0  # the caller's copy; the preset is unchanged
     assert presets.PRESETS["invertedpendulum"].task_params["observation_widened"]["0"] != 1.0
     assert presets.task_params_of("invertedpendulum", "gym:Pendulum-v1") == {}
-    assert presets.task_params_of("reacher", "gym:Reacher-v5") == {"observation_ranges": {"6": [-5.0, 5.0],
-                                                                                          "7": [-5.0, 5.0]}}
+    assert presets.task_params_of("reacher", "gym:Reacher-v5") == {"observation_ranges": {
+        "6": [-5.0, 5.0], "7": [-5.0, 5.0], "8": [-0.2, 0.2], "9": [-0.2, 0.2]}}
     assert all(presets.task_params_of(name, preset.task) == {} for name, preset in presets.PRESETS.items()
                if name not in ("invertedpendulum", "reacher"))
