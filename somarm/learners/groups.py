@@ -140,13 +140,15 @@ def _summed_linear(q, slopes, places, units, phi, x, weights, groups, mid, span,
     grid's axes where a factored table shares its slopes, so that the expanded sum holds them once)."""
     for a in range(q.shape[1]):
         values[a] = 0.0
+    one = _one_term(slopes[0], places)
     for g in range(units.shape[0]):
         for i in range(units.shape[1]):
             if phi[g, i] != 0.0:
                 u = units[g, i]
                 deviation(x, weights[u], groups[g], mid, span, z)
+                common = _slope_term(slopes[u], 0, z, places) if one else 0.0
                 for a in range(q.shape[1]):
-                    total = q[u, a] + scale * _slope_term(slopes[u], a, z, places)
+                    total = q[u, a] + scale * (common if one else _slope_term(slopes[u], a, z, places))
                     values[a] += phi[g, i] * total
 
 
@@ -155,6 +157,13 @@ def _shared(slopes, places):
     """Whether a unit's slopes ``(rows, obs_dim)`` are shared by every column: one row, or with action slopes
     (``places`` with columns) one row beside one per action axis."""
     return slopes.shape[0] == 1 or places.shape[1] > 0
+
+
+@numba.njit(cache=True, nogil=True)
+def _one_term(slopes, places):
+    """Whether every column's slope term is one number (one slope vector shared by every column, no action
+    slopes), so a unit's ``_slope_term`` is computed once rather than once per column."""
+    return slopes.shape[0] == 1 and places.shape[1] == 0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -350,9 +359,11 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     u = units[trial, g, i]
                     if linear:
                         deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
+                        one = _one_term(slopes[trial, u], places[trial])
+                        common = _slope_term(slopes[trial, u], 0, z, places[trial]) if one else 0.0
                         for a in range(n_columns):
-                            parts[g, a] += phi[trial, g, i] * (table[u, a] + scale * _slope_term(slopes[trial, u], a, z,
-                                                                                                  places[trial]))
+                            term = common if one else _slope_term(slopes[trial, u], a, z, places[trial])
+                            parts[g, a] += phi[trial, g, i] * (table[u, a] + scale * term)
                         continue
                     for a in range(n_columns):
                         parts[g, a] += phi[trial, g, i] * table[u, a]
@@ -454,6 +465,7 @@ def _move_linear(table, slopes, places, x, weights, group, mid, span, z, centre,
     slopes (one column, or with action slopes one per action axis beside it) move with the tried unit a_k's
     change alone, after every constant has moved (``_move_shared``)."""
     shared = _shared(slopes[0], places)
+    one = _one_term(slopes[0], places)  # the slope term the same for every column: computed once a unit
     if not neighbourhood_q:
         norm = _norm(deviation(x, weights[centre], group, mid, span, z), places, a_k)
         answer = table[centre, a_k] + _slope_term(slopes[centre], a_k, z, places)
@@ -475,9 +487,10 @@ def _move_linear(table, slopes, places, x, weights, group, mid, span, z, centre,
                 m = first + r * cols + c
                 norm = _norm(deviation(x, weights[m], group, mid, span, z), places, a_k)
                 tried = 0.0
+                common = _slope_term(slopes[m], 0, z, places) if one else 0.0
                 for a in range(table.shape[1]):
                     if psi_a[a] > 0.0:
-                        answer = table[m, a] + _slope_term(slopes[m], a, z, places)
+                        answer = table[m, a] + (common if one else _slope_term(slopes[m], a, z, places))
                         change = rate * psi * psi_a[a] * (targets[a] - (values[a] - parts[a]) - answer) / norm
                         table[m, a] += change
                         if shared:
@@ -540,6 +553,7 @@ def _move_factored(table, slopes, places, linear, x, weights, group, mid, span, 
     the normalised step of ``_move_linear``; shared slopes, ``scale`` of them in each column, move with the
     changes of the tried unit a_k's own columns, after every column has moved)."""
     shared = _shared(slopes[0], places)
+    one = _one_term(slopes[0], places)
     r0 = (centre - first) // cols
     c0 = (centre - first) - r0 * cols
     reach = int(n_s + 1.0) if neighbourhood_q else 0
@@ -550,11 +564,12 @@ def _move_factored(table, slopes, places, linear, x, weights, group, mid, span, 
                 m = first + r * cols + c
                 norm = 1.0 + deviation(x, weights[m], group, mid, span, z) if linear else 1.0
                 tried = 0.0
+                common = _slope_term(slopes[m], 0, z, places) if linear and one else 0.0
                 for col in range(table.shape[1]):
                     if psi_c[col] > 0.0:
                         answer = table[m, col]
                         if linear:
-                            answer += scale * _slope_term(slopes[m], col, z, places)
+                            answer += scale * (common if one else _slope_term(slopes[m], col, z, places))
                         change = rate * psi * psi_c[col] * (targets[swap[col]] - (values[swap[col]] - parts[col]) - answer) / norm
                         table[m, col] += change
                         if linear and shared:

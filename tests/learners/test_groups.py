@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from somq_cases import small_config
 
-from somarm.learners import grouping
+from somarm.learners import grouping, groups
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig, SOMQLearner
 
@@ -444,3 +444,34 @@ def test_action_slopes_learn_a_best_action_that_changes_within_one_unit():
 def test_action_slopes_without_shared_slopes_or_with_a_factored_table_are_refused_in_one_line(changes, message):
     with pytest.raises(ValueError, match=message):
         SOMQConfig(**changes)
+
+
+@pytest.mark.parametrize("rows, places_j", [(9, 0), (1, 0), (3, 2)])
+def test_the_summed_local_linear_answer_is_each_units_constant_plus_its_slope_term(rows, places_j):
+    # One slope vector per column (9), one shared by every column (1: its term computed once a unit), and
+    # shared slopes with one per action axis (3 with 2 places): the kernel's sum against the formula.
+    rng = np.random.default_rng(4)
+    n_groups, k, units_per_map, obs_dim, n_actions = 3, 2, 4, 5, 9
+    group_dims = np.array([[0, 1], [2, 3], [4, -1]])
+    q = rng.normal(size=(n_groups * units_per_map, n_actions))
+    slopes = rng.normal(size=(n_groups * units_per_map, rows, obs_dim))
+    places = rng.uniform(-1.0, 1.0, size=(n_actions, places_j))
+    units = np.array([[g * units_per_map + i for i in (1, 3)] for g in range(n_groups)])
+    phi = rng.random((n_groups, k))
+    x, mid, span = rng.normal(size=obs_dim), rng.normal(size=obs_dim), rng.uniform(0.5, 2.0, size=obs_dim)
+    weights = rng.normal(size=(n_groups * units_per_map, 2))
+    values = np.empty(n_actions)
+    groups._summed_linear(q, slopes, places, units, phi, x, weights, group_dims, mid, span, np.empty(obs_dim), 0.5,
+                          values)
+    expected = np.zeros(n_actions)
+    for g in range(n_groups):
+        for i in range(k):
+            u = units[g, i]
+            z = (x - mid) / span
+            for j, d in enumerate(group_dims[g]):
+                if d >= 0:
+                    z[d] = (x[d] - weights[u, j]) / span[d]
+            for a in range(n_actions):
+                slope = slopes[u, a] if rows == n_actions else slopes[u, 0] + places[a] @ slopes[u, 1:1 + places_j]
+                expected[a] += phi[g, i] * (q[u, a] + 0.5 * slope @ z)
+    np.testing.assert_allclose(values, expected, rtol=1e-12, atol=1e-12)
