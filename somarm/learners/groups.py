@@ -330,6 +330,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     z = np.empty(observations.shape[1])
     step = alpha / n_groups if not factored else alpha / (n_groups * action_shape.shape[0])
     scale = _slope_scale(slopes[0], places[0], factored, action_shape)
+    one = _one_term(slopes[0, 0], places[0])  # every column's slope term one number: computed once a unit
     wrapping = False
     for i in range(wrap.shape[0]):
         wrapping = wrapping or wrap[i]
@@ -359,7 +360,6 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
                     u = units[trial, g, i]
                     if linear:
                         deviation(observations[trial], input_weights[trial, u], groups[g], mid, span, z)
-                        one = _one_term(slopes[trial, u], places[trial])
                         common = _slope_term(slopes[trial, u], 0, z, places[trial]) if one else 0.0
                         for a in range(n_columns):
                             term = common if one else _slope_term(slopes[trial, u], a, z, places[trial])
@@ -465,7 +465,7 @@ def _move_linear(table, slopes, places, x, weights, group, mid, span, z, centre,
     slopes (one column, or with action slopes one per action axis beside it) move with the tried unit a_k's
     change alone, after every constant has moved (``_move_shared``)."""
     shared = _shared(slopes[0], places)
-    one = _one_term(slopes[0], places)  # the slope term the same for every column: computed once a unit
+    one = _one_term(slopes[0], places)
     if not neighbourhood_q:
         norm = _norm(deviation(x, weights[centre], group, mid, span, z), places, a_k)
         answer = table[centre, a_k] + _slope_term(slopes[centre], a_k, z, places)

@@ -155,7 +155,7 @@ _INVERTED_PENDULUM_SCALING = {"observation_ranges": {"0": [-1.0, 1.0], "1": [-0.
 
 #: Reacher-v5's scaling: the joint velocities (dimensions 6 and 7) over +-5 rad/s, the range a reaching arm
 #: moves in, instead of the random-action estimate (about +-20 rad/s, where a reach fills a tenth of a map);
-#: the fingertip-to-target offsets (dimensions 8 and 9) over +-0.2 m instead of the estimate's +-0.4, so the
+#: the fingertip-to-target offsets (dimensions 8 and 9) over +-0.2 m instead of the estimate's about +-0.38, so the
 #: maps spend their units where a reach ends rather than on offsets only random arms reach.
 _REACHER_SCALING = {"observation_ranges": {"6": [-5.0, 5.0], "7": [-5.0, 5.0], "8": [-0.2, 0.2], "9": [-0.2, 0.2]}}
 
