@@ -303,13 +303,14 @@ def act_kernel(observations, input_weights, action_weights, q, slopes, places, l
 
 
 @numba.njit(cache=True, nogil=True)
-def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, units, phi, chosen, actions,
+def learn_kernel(rewards, next_observations, discounts, active, observations, units, phi, chosen, actions,
                  input_weights, action_weights, q, slopes, places, linear, factored, action_shape, mid, span, groups,
                  shapes, k, alpha, lambda_s, lambda_a, n_s, n_a, offsets_s, offsets_a, neighbourhood_q, low, high, wrap, errors,
                  grow_now, gap):
-    """Steps 6 to 9 for every trial, in place on the maps and the tables (the rules of the module docstring;
-    with ``linear`` each moved unit's constant and slopes take the normalised step of its own answer; with
-    ``gap`` > 0 step 8 moves action unit a towards ``target - gap (max_b Q(s, b) - Q(s, a))``)."""
+    """Steps 6 to 9 for every ``active`` trial, in place on the maps and the tables (the rules of the module
+    docstring; the target is ``rewards + discounts max_a Q(next_observations, a)``, a trial whose discount is 0
+    not bootstrapping; with ``linear`` each moved unit's constant and slopes take the normalised step of its own
+    answer; with ``gap`` > 0 step 8 moves action unit a towards ``target - gap (max_b Q(s, b) - Q(s, a))``)."""
     n_groups, width = groups.shape
     n_units = q.shape[1] // n_groups
     n_actions = action_weights.shape[1]
@@ -335,10 +336,12 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
     for i in range(wrap.shape[0]):
         wrapping = wrapping or wrap[i]
     for trial in range(rewards.shape[0]):
+        if not active[trial]:
+            continue
         table = q[trial]
         a_k = chosen[trial]
         target = rewards[trial]
-        if bootstrap[trial]:
+        if discounts[trial] != 0.0:
             features(next_observations[trial], input_weights[trial], groups, shapes[trial], k, next_units, next_phi, part, order,
                      squared)
             _summed_any(table, slopes[trial], places[trial], linear, next_units, next_phi, next_observations[trial],
@@ -347,7 +350,7 @@ def learn_kernel(rewards, next_observations, bootstrap, gamma, observations, uni
             for a in range(1, n_actions):
                 if values[a] > top:
                     top = values[a]
-            target = target + gamma * top
+            target = target + discounts[trial] * top
         # Each map's part of the sum at every action unit, and the sum.
         sums = columns if factored else values
         for a in range(n_columns):

@@ -37,6 +37,7 @@ from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import grid_coordinates, grid_offsets, winners
+from somarm.learners.trail import Trail
 from somarm.validation import check_number
 
 __all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig", "SOMQLearner", "row_width",
@@ -167,6 +168,13 @@ class SOMQConfig(ConfigBase):
     which action is best. 0 is the paper's Q-learning; above 0 runs the grouped kernels
     (``somarm.learners.groups``)."""
 
+    n_step: int = 1
+    """Steps a target looks ahead (``somarm.learners.trail``): 1 is the paper's one-step target ``r + gamma
+    max_a Q(s', a)``; n > 1 learns each step n steps after it was taken, towards the n rewards that followed
+    it and ``gamma^n max_a Q`` of the state n steps on (sooner at an episode's end). Where an action changes
+    the reward only through the states it leads to, this carries its effect in the rewards themselves rather
+    than in a small difference between the next states' values. Needs gamma > 0; runs the grouped kernels."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -212,6 +220,14 @@ class SOMQConfig(ConfigBase):
         if self.action_slopes and self.action_factored:
             raise ValueError("action_slopes needs a table column per action unit: it needs action_factored=false, "
                              "got action_factored=true")
+        if isinstance(self.n_step, bool) or not isinstance(self.n_step, (int, np.integer)) or self.n_step < 1:
+            raise ValueError(f"n_step must be a whole number >= 1 (1: the one-step target), got {self.n_step!r}")
+        object.__setattr__(self, "n_step", int(self.n_step))
+        if self.n_step > 1 and self.gamma == 0.0:
+            raise ValueError(f"n_step={self.n_step} looks ahead through later rewards: it needs gamma > 0, got gamma=0")
+        if self.n_step > 1 and self.grow_every:
+            raise ValueError("n_step > 1 applies to maps of a fixed size: it needs grow_every=0, "
+                             f"got grow_every={self.grow_every}")
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -220,7 +236,7 @@ class SOMQConfig(ConfigBase):
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
         return (self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
-                or self.action_factored or self.action_gap > 0.0)
+                or self.action_factored or self.action_gap > 0.0 or self.n_step > 1)
 
     def slope_rows(self, action_dim: int) -> int:
         """Slope vectors per input unit with ``local_linear``: one per table column, one where shared, and one
@@ -308,6 +324,8 @@ class SOMQLearner(MapLearner):
             n_floats += n_trials * (n_maps * n_s * (width + n_c + 1) + n_a * action_dim + 2 * n_maps * (config.k_nearest + 1))
             if config.local_linear:  # a slope per unit, table column (one where shared) and observed dimension
                 n_floats += n_trials * n_maps * n_s * config.slope_rows(action_dim) * size
+            n_floats += Trail.floats(config.n_step, n_trials=n_trials, obs_dim=size, action_dim=action_dim,
+                                     n_groups=n_maps, k=config.k_nearest)
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -373,6 +391,14 @@ class SOMQLearner(MapLearner):
         # With the interpolated response ``_actions`` holds step 7's corrected targets, these the output.
         self._outputs = np.zeros((self.n_trials, self.action_dim))
         self._shifted = np.zeros(self.n_trials, dtype=np.bool_)  # stays all False for the winner response
+        # The steps that wait for their n-step target (none kept with n_step 1), under the names it is saved by.
+        self._trail = Trail(cfg.n_step, cfg.gamma, n_trials=self.n_trials, obs_dim=self.obs_dim,
+                            action_dim=self.action_dim, n_groups=self._group_units.shape[1], k=self._group_units.shape[2])
+        for name in Trail.ARRAYS:
+            setattr(self, "_trail_" + name, getattr(self._trail, name))
+        # The grouped kernel's per-trial discounts and mask (the paper's kernel takes gamma and every trial).
+        self._discounts = np.zeros(self.n_trials if cfg.grouped else 0)
+        self._all_trials = np.ones(self.n_trials if cfg.grouped else 0, dtype=np.bool_)
 
     def _initial_group_weights(self, weights: np.ndarray, rng: np.random.Generator) -> None:
         """Each map's units drawn uniformly over its dimensions' bounds (or ``input_init``), map after
@@ -393,13 +419,16 @@ class SOMQLearner(MapLearner):
 
     # ``_shapes`` and ``_errors``: each map's current grid and its units' summed errors (grouped maps only).
     # ``slopes``: each unit's local linear model (``local_linear`` only; a 1x1x1 placeholder otherwise).
-    _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors", "slopes")
+    # ``_trail_*``: the steps that wait for their n-step target (``n_step`` > 1 only; empty otherwise).
+    _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors", "slopes") + tuple(
+        "_trail_" + name for name in Trail.ARRAYS)
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     # ``_group_units`` and ``_phi``: each map's k nearest units and their weights (grouped maps only).
     _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted", "_group_units", "_phi")
     # Files saved before these existed load with ``_shifted`` all False (nothing shifts: the winner
     # response) and the paper's one map (no groups).
-    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes")
+    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes") + tuple(
+        "_trail_" + name for name in Trail.ARRAYS)
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -420,6 +449,10 @@ class SOMQLearner(MapLearner):
             raise ValueError("observations must be finite, got NaN or inf")
         rows = self._streams.next()
         values = self._current()
+        if self._trail.n > 1 and self._trail.count.any():  # a new episode: the waiting steps bootstrap where it broke
+            due = self._trail.due_before_act(x)
+            if due.any():
+                self._learn_rounds(due, np.ones(self.n_trials, dtype=np.bool_), values)
         self._observations[...] = x
         if self.config.grouped:
             groups.act_kernel(
@@ -466,17 +499,16 @@ class SOMQLearner(MapLearner):
         if x_next is not self._observations and not _kernels.all_finite(x_next):
             raise ValueError("next_observations must be finite, got NaN or inf")
         values = self._current()
+        if self._trail.n > 1:
+            self._trail.push(self._observations, self._group_units, self._phi, self._units, self._actions, r, x_next)
+            self._learn_rounds(self._trail.due_after_learn(bootstrap), bootstrap, values)
+            self._pending = False
+            self.t += 1
+            return
         if self.config.grouped:
-            groups.learn_kernel(
-                r, x_next, bootstrap, self.config.gamma, self._observations, self._group_units, self._phi,
-                self._units, self._actions, self.input_weights, self.action_weights, self.q, self.slopes,
-                self._action_places(), self.config.local_linear, self.config.action_factored, self._action_grid_shape,
-                self._mid, self._span, self._groups,
-                self._shapes, self.config.k_nearest, values["alpha"], values["lambda_s"], values["lambda_a"], values["n_s"],
-                values["n_a"], self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self.action_low,
-                self.action_high, self._wrap, self._errors,
-                self.config.grow_every > 0 and (self.t + 1) % self.config.grow_every == 0, self.config.action_gap,
-            )
+            np.multiply(bootstrap, self.config.gamma, out=self._discounts)
+            self._grouped_learn(r, x_next, self._discounts, self._all_trials, self._observations, self._group_units,
+                                self._phi, self._units, self._actions, values)
             self._pending = False
             self.t += 1
             return
@@ -489,6 +521,26 @@ class SOMQLearner(MapLearner):
         )
         self._pending = False
         self.t += 1
+
+    def _grouped_learn(self, returns, x_next, discounts, active, observations, units, phi, chosen, actions,
+                       values) -> None:
+        """Steps 6 to 9 of the grouped kernels for the ``active`` trials' steps (``observations`` ... ``actions``,
+        what an ``act`` left), towards ``returns + discounts max_a Q(x_next, a)``."""
+        cfg = self.config
+        groups.learn_kernel(
+            returns, x_next, discounts, active, observations, units, phi, chosen, actions, self.input_weights,
+            self.action_weights, self.q, self.slopes, self._action_places(), cfg.local_linear, cfg.action_factored,
+            self._action_grid_shape, self._mid, self._span, self._groups, self._shapes, cfg.k_nearest, values["alpha"],
+            values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"], self._offsets_s, self._offsets_a,
+            cfg.neighbourhood_q, self.action_low, self.action_high, self._wrap, self._errors,
+            cfg.grow_every > 0 and (self.t + 1) % cfg.grow_every == 0, cfg.action_gap,
+        )
+
+    def _learn_rounds(self, due: np.ndarray, bootstrap: np.ndarray, values) -> None:
+        """Learn from the ``due`` oldest waiting steps of each trial, oldest first (``somarm.learners.trail``)."""
+        last = self._trail.last
+        for active, returns, discounts, observations, units, phi, chosen, actions in self._trail.rounds(due, bootstrap):
+            self._grouped_learn(returns, last, discounts, active, observations, units, phi, chosen, actions, values)
 
     def greedy_units(self, observations) -> tuple[np.ndarray, np.ndarray]:
         """The winning input unit and its best action unit (ties to the lowest index).
