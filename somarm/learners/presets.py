@@ -188,7 +188,7 @@ def _benchmarks() -> tuple[Preset, ...]:
         "n_a": Schedule(2.0, InverseDecay(20_000.0))}, _INVERTED_PENDULUM_SCALING)
     reacher = _benchmark("reacher", "Reacher-v5", {
         "gamma": 0.95, "action_shape": (3, 3), "grid_span": 0.1, "input_groups": "pairs", "input_shape": (10, 10),
-        "k_nearest": 3, "local_linear": True, "shared_slopes": True, "n_a": Schedule(2.0)}, _REACHER_SCALING)
+        "k_nearest": 3, "local_linear": True, "shared_slopes": True, "n_a": Schedule(2.0), "n_step": 3}, _REACHER_SCALING)
     # The DeepMind Control Suite's report tasks (``tasks.gym_envs``' DMC_BENCHMARKS).
     dmc = Preset(
         "dmc", "beyond the paper: the DeepMind Control Suite's one-torque tasks (dmc:cartpole-*, dmc:pendulum-swingup)",

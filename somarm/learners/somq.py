@@ -46,7 +46,7 @@ __all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig",
 #: The settings that choose how the state is seen and Q is held and learned beyond the paper's one map
 #: (``somarm.learners.groups``); at ``SOMQConfig``'s defaults they are the paper's model.
 REPRESENTATION_SETTINGS = ("input_groups", "k_nearest", "grow_every", "local_linear", "shared_slopes",
-                           "action_slopes", "action_factored", "action_gap")
+                           "action_slopes", "action_factored", "action_gap", "n_step")
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")

@@ -45,7 +45,8 @@ CASES = (
 
 
 #: The input representations (``REPRESENTATION_SETTINGS``: ``input_groups``, ``k_nearest``, ``grow_every``,
-#: ``local_linear``, ``shared_slopes``, ``action_slopes``, ``action_factored`` and the learning rule ``action_gap``) at
+#: ``local_linear``, ``shared_slopes``, ``action_slopes``, ``action_factored`` and the learning rules ``action_gap`` and
+#: ``n_step``) at
 #: Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
 _ONE_MAP = {**paper_representation(), "input_shape": (20, 20)}
 _PAIRS = {**_ONE_MAP, "input_groups": "pairs", "input_shape": (10, 10)}
@@ -66,6 +67,8 @@ REPRESENTATIONS = (
     ("45 pairs 10x10, 3 nearest, factored", {**_PAIRS, "k_nearest": 3, "action_factored": True}),
     ("45 pairs 10x10, 3 nearest, gap 0.5", {**_PAIRS, "k_nearest": 3, "action_gap": 0.5}),
     ("one 20x20 map, action_gap 0.5", {**_ONE_MAP, "action_gap": 0.5}),
+    ("45 pairs, 3 nearest, shared, 3-step", {**_PAIRS, "k_nearest": 3, "local_linear": True, "shared_slopes": True,
+                                             "n_step": 3}),
 )
 
 
@@ -79,8 +82,10 @@ def _inputs(case: Case, n_trials: int, n_steps: int) -> tuple[np.ndarray, np.nda
     return rng.random((n_steps, n_trials, case.obs_dim)), -rng.random((n_steps, n_trials))
 
 
-def time_batched(case: Case, n_trials: int, n_steps: int, *, t0: int = 0) -> float:
-    """Seconds per trial-step of ``SOMQLearner.act`` + ``learn``, starting at step ``t0``."""
+def time_batched(case: Case, n_trials: int, n_steps: int, *, t0: int = 0, chained: bool = False) -> float:
+    """Seconds per trial-step of ``SOMQLearner.act`` + ``learn``, starting at step ``t0``; ``chained``: each step
+    learns towards the next step's observation, not terminal (as an episode's steps do: delayed reward
+    bootstraps, n-step targets wait), else every step is terminal."""
     # Warm up first: numba picks (or loads) a specialisation per array layout, and a batch of one
     # trial has other layouts than a batch of many.
     warm = SOMQLearner(case.config, n_trials=n_trials, **_bounds(case))
@@ -89,11 +94,15 @@ def time_batched(case: Case, n_trials: int, n_steps: int, *, t0: int = 0) -> flo
         warm.learn(r)
     learner = SOMQLearner(case.config, n_trials=n_trials, **_bounds(case))
     learner.t = t0
-    observations, rewards = _inputs(case, n_trials, n_steps)
+    observations, rewards = _inputs(case, n_trials, n_steps + 1)
+    going = np.zeros(n_trials, dtype=np.bool_)
     start = time.perf_counter()
-    for x, r in zip(observations, rewards, strict=True):
-        learner.act(x)
-        learner.learn(r)
+    for i in range(n_steps):
+        learner.act(observations[i])
+        if chained:
+            learner.learn(rewards[i], observations[i + 1], going)
+        else:
+            learner.learn(rewards[i])
     return (time.perf_counter() - start) / (n_steps * n_trials)
 
 
@@ -149,7 +158,7 @@ def representation_rows(n_steps: int, repeats: int, *, trial_counts: tuple[int, 
         bytes_one = memory_needed("somq", case.config, n_trials=1, obs_dim=10, action_dim=2)[1]
         bytes_two = memory_needed("somq", case.config, n_trials=2, obs_dim=10, action_dim=2)[1]
         for n_trials in trial_counts:
-            micros.append(1e6 * min(time_batched(case, n_trials, n_steps) for _ in range(repeats)))
+            micros.append(1e6 * min(time_batched(case, n_trials, n_steps, chained=True) for _ in range(repeats)))
             print(f"{label:36s} {n_trials:8d} {micros[-1]:14.2f} {(bytes_two - bytes_one) / 1e6:13.3f}")
     return micros
 
