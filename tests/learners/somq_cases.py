@@ -7,6 +7,9 @@ from somarm.learners.somq import SOMQConfig
 
 BOUNDS = dict(observation_low=[0.0, -1.0], observation_high=[1.0, 1.0], action_low=[-1.0, 0.0, -2.0],
               action_high=[1.0, 1.0, 2.0])
+#: Four observed dimensions and two action dimensions, for the grouped maps' tests.
+BOX4 = dict(observation_low=[0.0, -1.0, 0.0, -2.0], observation_high=[1.0, 1.0, 2.0, 2.0],
+            action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
 
 
 def small_config(input_shape, neighbourhood_q, gamma, noise="uniform", **changes) -> SOMQConfig:
@@ -23,3 +26,15 @@ def small_config(input_shape, neighbourhood_q, gamma, noise="uniform", **changes
 def arc(difference, period):
     """An independent (NumPy) statement of the shorter way round a circle, to check the kernels with."""
     return difference - period * np.floor(difference / period + 0.5)
+
+
+def batch_and_alone(config: SOMQConfig, drive, steps: int):
+    """A batch of three trials and its third trial alone (seed 9, ``BOX4``), each driven ``steps`` steps by
+    ``drive(learner, steps)``: a trial alone must equal the same trial in a batch."""
+    from somarm.learners.somq import SOMQLearner
+
+    batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
+    alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
+    drive(batch, steps)
+    drive(alone, steps)
+    return batch, alone

@@ -1,13 +1,10 @@
 import numpy as np
 import pytest
-from somq_cases import small_config
+from somq_cases import BOX4, batch_and_alone, small_config
 
 from somarm.learners import grouping, groups
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.somq import SOMQConfig, SOMQLearner
-
-BOX4 = dict(observation_low=[0.0, -1.0, 0.0, -2.0], observation_high=[1.0, 1.0, 2.0, 2.0],
-            action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
 
 
 def _drive(learner, steps, seed=5, gamma_next=True):
@@ -59,11 +56,7 @@ def test_one_group_of_every_dimension_in_order_is_the_papers_kernel_bit_for_bit(
                                      {"input_groups": "singles", "local_linear": True, "shared_slopes": True,
                                       "action_slopes": True, "neighbourhood_q": False, "response": "interpolated"}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch(changes):
-    config = small_config((3, 3), True, 0.5).with_changes(changes)
-    batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
-    alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
-    _drive(batch, 80)
-    _drive(alone, 80)
+    batch, alone = batch_and_alone(small_config((3, 3), True, 0.5).with_changes(changes), _drive, 80)
     for name in ("input_weights", "action_weights", "q", "slopes"):
         np.testing.assert_array_equal(getattr(batch, name)[2], getattr(alone, name)[0])
     x = np.random.default_rng(1).random((1, 5, 4)) * [1.0, 2.0, 2.0, 4.0] - [0.0, 1.0, 0.0, 2.0]

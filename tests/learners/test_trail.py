@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from somq_cases import small_config
+from somq_cases import BOX4, batch_and_alone, small_config
 
 from somarm.learners.schedules import Schedule
 from somarm.learners.somq import SOMQConfig, SOMQLearner
@@ -110,19 +110,11 @@ def _drive_episodes(learner, steps, seed=6):
         x = np.where((ends < 0.16)[:, None], restart, nxt)  # terminal, or a time limit: a new episode
 
 
-BOX4 = dict(observation_low=[0.0, -1.0, 0.0, -2.0], observation_high=[1.0, 1.0, 2.0, 2.0],
-            action_low=[-1.0, 0.0], action_high=[1.0, 1.0])
-
-
 @pytest.mark.parametrize("changes", [{"n_step": 3}, {"n_step": 5, "input_groups": "pairs", "k_nearest": 2},
                                      {"n_step": 2, "input_groups": "pairs", "local_linear": True,
                                       "shared_slopes": True, "response": "interpolated"}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch_with_n_step_targets(changes):
-    config = small_config((3, 3), True, 0.8).with_changes(changes)
-    batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
-    alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
-    _drive_episodes(batch, 150)
-    _drive_episodes(alone, 150)
+    batch, alone = batch_and_alone(small_config((3, 3), True, 0.8).with_changes(changes), _drive_episodes, 150)
     for name in ("input_weights", "action_weights", "q", "slopes", "_trail_rewards", "_trail_phi", "_trail_count"):
         np.testing.assert_array_equal(_trial(getattr(batch, name), name, 2), _trial(getattr(alone, name), name, 0))
     assert batch.q.any()
