@@ -452,7 +452,7 @@ class SOMQLearner(MapLearner):
         if self._trail.n > 1 and self._trail.count.any():  # a new episode: the waiting steps bootstrap where it broke
             due = self._trail.due_before_act(x)
             if due.any():
-                self._learn_rounds(due, np.ones(self.n_trials, dtype=np.bool_), values)
+                self._learn_rounds(due, self._all_trials, values)
         self._observations[...] = x
         if self.config.grouped:
             groups.act_kernel(
@@ -502,23 +502,18 @@ class SOMQLearner(MapLearner):
         if self._trail.n > 1:
             self._trail.push(self._observations, self._group_units, self._phi, self._units, self._actions, r, x_next)
             self._learn_rounds(self._trail.due_after_learn(bootstrap), bootstrap, values)
-            self._pending = False
-            self.t += 1
-            return
-        if self.config.grouped:
+        elif self.config.grouped:
             np.multiply(bootstrap, self.config.gamma, out=self._discounts)
             self._grouped_learn(r, x_next, self._discounts, self._all_trials, self._observations, self._group_units,
                                 self._phi, self._units, self._actions, values)
-            self._pending = False
-            self.t += 1
-            return
-        _kernels.learn_kernel(
-            r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
-            self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
-            values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
-            self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self._shifted,
-            self.action_low, self.action_high, self._wrap,
-        )
+        else:
+            _kernels.learn_kernel(
+                r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
+                self._actions, self.input_weights, self.action_weights, self.q, values["alpha"],
+                values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"],
+                self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self._shifted,
+                self.action_low, self.action_high, self._wrap,
+            )
         self._pending = False
         self.t += 1
 

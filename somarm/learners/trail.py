@@ -107,9 +107,10 @@ class Trail:
         self._drop(due)
 
     def _drop(self, due: np.ndarray) -> None:
-        """Remove each trial's ``due`` oldest steps, moving the rest to the front."""
-        for trial in np.flatnonzero(due):
-            d, c = int(due[trial]), int(self.count[trial])
+        """Remove each trial's ``due`` oldest steps, moving the rest to the front (the trials that drop d steps
+        together: slots past a trial's count hold nothing it reads, so they move with the rest)."""
+        for d in np.unique(due[due > 0]):
+            trials = due == d
             for array in (self.observations, self.units, self.phi, self.chosen, self.actions, self.rewards):
-                array[:c - d, trial] = array[d:c, trial]
-            self.count[trial] = c - d
+                array[:self.n - d, trials] = array[d:, trials]
+        self.count -= due

@@ -3,7 +3,7 @@
 import numpy as np
 
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
-from somarm.learners.somq import SOMQConfig
+from somarm.learners.somq import SOMQConfig, SOMQLearner
 
 BOUNDS = dict(observation_low=[0.0, -1.0], observation_high=[1.0, 1.0], action_low=[-1.0, 0.0, -2.0],
               action_high=[1.0, 1.0, 2.0])
@@ -31,8 +31,6 @@ def arc(difference, period):
 def batch_and_alone(config: SOMQConfig, drive, steps: int):
     """A batch of three trials and its third trial alone (seed 9, ``BOX4``), each driven ``steps`` steps by
     ``drive(learner, steps)``: a trial alone must equal the same trial in a batch."""
-    from somarm.learners.somq import SOMQLearner
-
     batch = SOMQLearner(config, n_trials=3, seed=9, **BOX4)
     alone = SOMQLearner(config, n_trials=1, seed=9, trial_ids=[2], **BOX4)
     drive(batch, steps)
