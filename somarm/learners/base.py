@@ -275,6 +275,11 @@ class LearnerBase(abc.ABC):
         return dict(self._current())
 
     # -- save / load ----------------------------------------------------------------------------
+    def _check_restored(self) -> None:
+        """Refuse a loaded state whose arrays have the right shapes but values this kind cannot act on
+        (indices out of range); ``ValueError`` naming what is wrong. Nothing to check by default."""
+        return None
+
     def save(self, path: str | os.PathLike) -> None:
         """Write the whole state (config, maps, values, step, random streams) atomically to ``path``."""
         arrays = {name: getattr(self, name) for name in self._STATE_ARRAYS + self._PENDING_ARRAYS}

@@ -141,4 +141,5 @@ def _restore(cls: type, meta: dict[str, Any], arrays: dict[str, np.ndarray], pat
         target[...] = arrays[name]
     learner.t, learner._pending = int(meta["t"]), bool(meta["pending"])
     learner._streams.set_state({**meta["streams"], "buffer": arrays["stream_buffer"]})
+    learner._check_restored()
     return learner

@@ -430,6 +430,17 @@ class SOMQLearner(MapLearner):
     _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes") + tuple(
         "_trail_" + name for name in Trail.ARRAYS)
 
+    def _check_restored(self) -> None:
+        trail, most = self._trail, self._trail.observations.shape[0] - 1
+        if trail.count.size and not ((trail.count >= 0) & (trail.count <= most)).all():
+            raise ValueError(f"_trail_count must hold 0 to {most} waiting steps a trial (n_step - 1), "
+                             f"got {trail.count.tolist()}")
+        rows, n_actions = self.q.shape[1], self.action_weights.shape[1]
+        if not ((trail.units >= 0) & (trail.units < rows)).all() or not (
+                (trail.chosen >= 0) & (trail.chosen < n_actions)).all():
+            raise ValueError(f"_trail_units must name input units 0 to {rows - 1} and _trail_chosen action units "
+                             f"0 to {n_actions - 1}")
+
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
 

@@ -164,3 +164,21 @@ def test_a_bad_n_step_is_refused_in_one_line(changes, message):
 
 def test_n_step_runs_the_grouped_kernels_and_one_is_the_papers_path():
     assert SOMQConfig(gamma=0.9, n_step=2).grouped and not SOMQConfig(gamma=0.9).grouped
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("_trail_count", 7, "_trail_count must hold 0 to 3 waiting steps"),
+    ("_trail_units", 10_000, "_trail_units must name input units"),
+    ("_trail_chosen", -1, "_trail_units must name input units .* and _trail_chosen action units"),
+])
+def test_a_learner_file_with_waiting_steps_out_of_range_is_refused_in_one_line(tmp_path, name, value, message):
+    learner = SOMQLearner(small_config((3,), True, 0.8).with_changes({"n_step": 4, "input_groups": "pairs"}),
+                          n_trials=2, seed=4, **BOX4)
+    _drive_episodes(learner, 30)
+    learner.save(tmp_path / "l.npz")
+    arrays = dict(np.load(tmp_path / "l.npz", allow_pickle=False))
+    arrays[name] = np.full_like(arrays[name], value)
+    np.savez(tmp_path / "damaged.npz", **arrays)
+    with pytest.raises(ValueError, match=rf"^{tmp_path / 'damaged.npz'} is a damaged learner file: {message}") as caught:
+        SOMQLearner.load(tmp_path / "damaged.npz")
+    assert "\n" not in str(caught.value)
