@@ -1,16 +1,28 @@
-"""Yardsticks for SOM-Q on the suite: what simple fixed controllers earn on dmc:cartpole-balance and
-dmc:point_mass-easy, over the suite's 1,000-step episodes (reset seeds 0 to ``--episodes`` - 1).
+"""Yardsticks for SOM-Q on the suite: what simple fixed controllers earn on dmc:cartpole-balance,
+dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episodes (reset seeds 0 to
+``--episodes`` - 1), and with ``--through`` how much of each controller SOM-Q's maps can hold.
 
 - cartpole-balance: no force at all; the discrete-time LQR law of the pole linearised round upright
   (the suite's own physics, differentiated numerically at the control timestep); the same law rounded to
   the 11 forces of the ``dmc`` preset's grid (a sixth of the action box) and to 11 over the whole box.
+- pendulum-swingup: energy pumping (``u = clip(5 w (E* - E))``, E the pole's energy from the suite's
+  mass, length and gravity, E* upright at rest) and a PD catch (``u = clip(-10 theta - 2 w)``) once the
+  pole is within 18 degrees of upright; rounded to the ``dmc`` preset's 11 torques and to 11 over the box.
 - point_mass-easy: the PD law ``u = clip(-50 x - 10 v)`` and the same rounded to the 3x3 grid of
   ``dmc_2d`` (-1, 0, 1 per axis).
 
-Prints one JSON line per controller. Used by docs/benchmarks/dmc/TUNING.md to say what the
-representation can hold, apart from learning.
+``--through``: each controller (rounded to a grid SOM-Q can answer with) as SOM-Q holds it when it
+learns it by imitation (``somarm.reproduce.yardsticks.through_representation``: gamma 0, one random
+action unit a step, rewarded by minus its squared distance from the controller's action) on
+``--states`` states the controller visits with action noise, from tuning seed ``--seed``; each
+representation is the task's preset changed as its row says, over the task's observation bounds
+(``BOUNDS``). The returns are the learned greedy policies'. This tells apart what the maps can hold
+from what Q-learning finds in them.
+
+Prints one JSON line per row. Used by docs/benchmarks/dmc/TUNING.md.
 
     python scripts/dmc_yardsticks.py --episodes 5
+    python scripts/dmc_yardsticks.py --through --seed 100 --states 50000
 """
 
 from __future__ import annotations
@@ -22,6 +34,19 @@ import numpy as np
 import scipy.linalg
 
 from somarm.tasks.dmc import SuiteEnv
+
+#: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
+BOUNDS = {
+    "dmc:cartpole-balance": ([-1.5, -1.0, -0.25, -1.5, -2.0], [1.5, 1.0, 0.25, 1.5, 2.0]),
+    "dmc:pendulum-swingup": ([-1.0, -1.0, -10.0], [1.0, 1.0, 10.0]),
+    "dmc:point_mass-easy": ([-0.3, -0.3, -0.1, -0.1], [0.3, 0.3, 0.1, 0.1]),
+}
+#: Per task: the action noise (sd) of the visited states, and the representations tried (preset changes).
+THROUGH = {
+    "dmc:cartpole-balance": (0.1, ["", "input_groups=2,4", "input_groups=2,3,4", "input_groups=2,4 input_shape=30x30"]),
+    "dmc:pendulum-swingup": (0.3, ["grid_span=1", "grid_span=1 input_shape=30x30", "grid_span=1 k_nearest=3"]),
+    "dmc:point_mass-easy": (0.3, ["", "input_groups=0,2;1,3", "input_groups=0,2;1,3 k_nearest=3"]),
+}
 
 
 def _returns(env: SuiteEnv, policy, episodes: int) -> list[float]:
@@ -63,29 +88,97 @@ def _rounded(u: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return grid[np.abs(grid[None, :] - np.atleast_1d(u)[:, None]).argmin(axis=1)]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--episodes", type=int, default=5)
-    args = parser.parse_args()
-    rows = []
-    env = SuiteEnv("cartpole", "balance")
-    gain = _cartpole_gain(env)
+def _swing_up(env: SuiteEnv):
+    """Energy pumping and a PD catch for the suite's pendulum: its mass, the distance of its centre of mass
+    from the hinge and its inertia about the hinge, read from the model."""
+    model = env.physics.model
+    body = model.body("pole").id
+    mass, arm = float(model.body_mass[body]), float(np.linalg.norm(model.body_ipos[body]))
+    inertia = float(model.body_inertia[body, 1]) + mass * arm ** 2
+    weight = mass * arm * float(-model.opt.gravity[2])
+
+    def law(o: np.ndarray) -> np.ndarray:
+        cos, sin, w = o
+        if cos > 0.95:
+            return np.clip(-10.0 * np.arctan2(sin, cos) - 2.0 * w, -1.0, 1.0)
+        energy = 0.5 * inertia * w * w + weight * (cos - 1.0)
+        return np.clip(5.0 * w * -energy, -1.0, 1.0) if abs(w) > 1e-3 else 1.0
+
+    return law
+
+
+def controllers() -> dict[str, list[tuple[str, object]]]:
+    """Per task: (what, policy) of every fixed controller, the first of each the one ``--through`` holds."""
+    sixth, whole = np.linspace(-1 / 6, 1 / 6, 11), np.linspace(-1.0, 1.0, 11)
+    cartpole = SuiteEnv("cartpole", "balance")
+    gain = _cartpole_gain(cartpole)
+    cartpole.close()
 
     def lqr(o: np.ndarray) -> np.ndarray:
         x, cos, sin, xdot, thetadot = o
         return np.clip(-gain @ np.array([x, np.arctan2(sin, cos), xdot, thetadot]), -1.0, 1.0)
 
-    sixth, whole = np.linspace(-1 / 6, 1 / 6, 11), np.linspace(-1.0, 1.0, 11)
-    for what, policy in [("no force", lambda o: 0.0), ("LQR", lqr),
-                         ("LQR rounded to the dmc preset's 11 forces (a sixth of the box)", lambda o: _rounded(lqr(o), sixth)),
-                         ("LQR rounded to 11 forces over the box", lambda o: _rounded(lqr(o), whole))]:
-        rows.append({"task": "dmc:cartpole-balance", "controller": what, "returns": _returns(env, policy, args.episodes)})
-    env.close()
-    env = SuiteEnv("point_mass", "easy")
+    pendulum = SuiteEnv("pendulum", "swingup")
+    swing = _swing_up(pendulum)
+    pendulum.close()
     pd = lambda o: np.clip(-50.0 * o[:2] - 10.0 * o[2:], -1.0, 1.0)  # noqa: E731
-    for what, policy in [("PD", pd), ("PD rounded to the dmc_2d preset's 3x3 grid", lambda o: np.round(pd(o)))]:
-        rows.append({"task": "dmc:point_mass-easy", "controller": what, "returns": _returns(env, policy, args.episodes)})
+    return {
+        "dmc:cartpole-balance": [
+            ("LQR rounded to the dmc preset's 11 forces (a sixth of the box)", lambda o: _rounded(lqr(o), sixth)),
+            ("no force", lambda o: 0.0), ("LQR", lqr),
+            ("LQR rounded to 11 forces over the box", lambda o: _rounded(lqr(o), whole))],
+        "dmc:pendulum-swingup": [
+            ("energy pumping and PD catch rounded to 11 torques over the box", lambda o: _rounded(swing(o), whole)),
+            ("energy pumping and PD catch", swing),
+            ("energy pumping and PD catch rounded to the dmc preset's 11 torques", lambda o: _rounded(swing(o), sixth))],
+        "dmc:point_mass-easy": [
+            ("PD rounded to the dmc_2d preset's 3x3 grid", lambda o: np.round(pd(o))), ("PD", pd)],
+    }
+
+
+def _through(task: str, law, args) -> list[dict]:
+    """``law`` as each of the task's ``THROUGH`` representations holds it (rows, one a representation)."""
+    from somarm import tasks
+    from somarm.learners.settings import parse_settings
+    from somarm.learners.somq import SOMQConfig
+    from somarm.reproduce import yardsticks
+    from somarm.tasks.dmc import gym_id, split_name
+
+    low, high = BOUNDS[task]
+    scaling = tasks.make(task, seed=args.seed, observation_low=low, observation_high=high)
+    noise, representations = THROUGH[task]
+    states, actions = yardsticks.controller_states(gym_id(task), law, scaling, args.states, noise, args.seed)
+    env = SuiteEnv(*split_name(task))
+    rows = []
+    for text in representations:
+        changes = parse_settings(SOMQConfig, dict(item.split("=", 1) for item in text.split()))
+        policy = yardsticks.through_representation(gym_id(task), states, actions, scaling, changes, args.seed,
+                                                   preset=tasks.record(task).preset)
+        rows.append({"task": task, "held by": f"the {tasks.record(task).preset} preset" + (f", {text}" if text else ""),
+                     "seed": args.seed, "states": args.states, "noise": noise,
+                     "returns": _returns(env, policy, args.episodes)})
     env.close()
+    scaling.close()
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=5)
+    parser.add_argument("--through", action="store_true", help="each controller as SOM-Q's maps hold it")
+    parser.add_argument("--seed", type=int, default=100, help="with --through: a tuning seed (100-199)")
+    parser.add_argument("--states", type=int, default=50_000, help="with --through: the controller's states learned")
+    args = parser.parse_args()
+    if args.through and not 100 <= args.seed <= 199:
+        raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
+    rows = []
+    for task, laws in controllers().items():
+        if args.through:
+            rows += _through(task, laws[0][1], args)
+            continue
+        env = SuiteEnv(*task[len("dmc:"):].split("-", 1))
+        rows += [{"task": task, "controller": what, "returns": _returns(env, law, args.episodes)} for what, law in laws]
+        env.close()
     for row in rows:
         row["mean"] = round(float(np.mean(row["returns"])), 1)
         print(json.dumps(row), flush=True)

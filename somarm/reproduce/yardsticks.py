@@ -192,7 +192,7 @@ def controller_states(env_id: str, policy: Policy, task, steps: int, noise: floa
 
 
 def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray, task, changes: dict,
-                           seed: int) -> Policy:
+                           seed: int, preset: str | None = None) -> Policy:
     """A controller as a SOM-Q learner with the benchmark preset changed by ``changes`` (an input
     representation: ``input_groups``, ``k_nearest``, ``grow_every``, ``input_shape``, ``response``) can hold
     it, learned on the controller's own ``states`` and ``torques`` (``controller_states``): each step one
@@ -200,12 +200,13 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
     grid torque nearest the controller's as that representation sees the state (no neighbourhood over the
     torques, which would blur their values together; Q starts at -1, below
     what a tried torque earns, so a pair never tried is never the greedy one). Returns the learner's
-    greedy policy over raw observations (``task.scale``)."""
+    greedy policy over raw observations (``task.scale``). ``preset``: the preset changed (default: the
+    benchmark's for ``env_id``; a suite task's registered id, ``somarm.tasks.dmc.gym_id``, names its own)."""
     from somarm.learners import make, presets
     from somarm.learners.schedules import Constant
     from somarm.tasks import gym_envs
 
-    config = presets.get(gym_envs.BENCHMARKS[env_id][0]).with_changes(
+    config = presets.get(preset or gym_envs.BENCHMARKS[env_id][0]).with_changes(
         {"gamma": 0.0, "p": 1.0, "p.decay": Constant(), "p.floor": 0.0, "epsilon": 0.0, "q_init": -1.0, "n_a": 0.0,
          **changes})
     facts = gym_envs.describe(env_id)

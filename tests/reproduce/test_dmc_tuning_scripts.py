@@ -59,3 +59,13 @@ def test_the_lqr_law_through_the_dmc_presets_forces_balances_the_cartpole():
 
     assert yardsticks._returns(env, policy, 1)[0] >= 990.0
     assert yardsticks._returns(env, lambda o: 0.0, 1)[0] < 990.0  # pushing nothing does not: the bound can fail
+
+
+def test_the_swing_up_law_lifts_the_pendulum_with_the_whole_box_and_not_with_the_dmc_presets_torques():
+    yardsticks = _script("dmc_yardsticks")
+    laws = dict(yardsticks.controllers()["dmc:pendulum-swingup"])
+    from somarm.tasks.dmc import SuiteEnv
+
+    env = SuiteEnv("pendulum", "swingup")
+    assert yardsticks._returns(env, laws["energy pumping and PD catch rounded to 11 torques over the box"], 1)[0] >= 600.0
+    assert yardsticks._returns(env, laws["energy pumping and PD catch rounded to the dmc preset's 11 torques"], 1)[0] == 0.0
