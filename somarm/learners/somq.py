@@ -46,7 +46,7 @@ __all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig",
 #: The settings that choose how the state is seen and Q is held and learned beyond the paper's one map
 #: (``somarm.learners.groups``); at ``SOMQConfig``'s defaults they are the paper's model.
 REPRESENTATION_SETTINGS = ("input_groups", "k_nearest", "grow_every", "local_linear", "shared_slopes",
-                           "action_slopes", "action_factored", "action_gap", "n_step", "hold")
+                           "action_slopes", "action_factored", "action_gap", "n_step")
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
@@ -175,13 +175,6 @@ class SOMQConfig(ConfigBase):
     the reward only through the states it leads to, this carries its effect in the rewards themselves rather
     than in a small difference between the next states' values. Needs gamma > 0; runs the grouped kernels."""
 
-    hold: bool = False
-    """Hold each chosen action while every map's nearest unit stays the same, up to ``n_step`` steps, and
-    learn each step towards the rewards to the decision's end and ``gamma^k max_a Q`` where the next
-    decision starts (``somarm.learners.trail``): a decision lasts as long as the maps cannot tell its
-    states apart. At a short time step, where the one-step targets of all actions bootstrap from the same
-    unit, this keeps the effect of an action on where the state goes next. Needs ``n_step`` > 1."""
-
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -235,12 +228,6 @@ class SOMQConfig(ConfigBase):
         if self.n_step > 1 and self.grow_every:
             raise ValueError("n_step > 1 applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
-        if not isinstance(self.hold, (bool, np.bool_)):
-            raise ValueError(f"hold must be true or false, got {self.hold!r}")
-        object.__setattr__(self, "hold", bool(self.hold))
-        if self.hold and self.n_step < 2:
-            raise ValueError("hold keeps an action for up to n_step steps: it needs n_step >= 2, "
-                             f"got n_step={self.n_step}")
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -453,11 +440,6 @@ class SOMQLearner(MapLearner):
                 (trail.chosen >= 0) & (trail.chosen < n_actions)).all():
             raise ValueError(f"_trail_units must name input units 0 to {rows - 1} and _trail_chosen action units "
                              f"0 to {n_actions - 1}")
-        if not ((trail.held_steps >= 0) & (trail.held_steps <= trail.n)).all() or not (
-                (trail.held_cell >= 0) & (trail.held_cell < rows)).all() or not (
-                (trail.held_chosen >= 0) & (trail.held_chosen < n_actions)).all():
-            raise ValueError(f"_trail_held_steps must be 0 to {trail.n} (n_step), _trail_held_cell input units 0 to "
-                             f"{rows - 1} and _trail_held_chosen action units 0 to {n_actions - 1}")
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -482,7 +464,6 @@ class SOMQLearner(MapLearner):
             due = self._trail.due_before_act(x)
             if due.any():
                 self._learn_rounds(due, self._all_trials, values)
-                self._trail.end_decisions(due > 0)
         self._observations[...] = x
         if self.config.grouped:
             groups.act_kernel(
@@ -493,10 +474,6 @@ class SOMQLearner(MapLearner):
                 self.action_high, self._wrap, self.config.noise == "gaussian", self._interpolated,
                 self._action_grid_shape, self._group_units, self._phi, self._units, self._actions,
             )
-            if self.config.hold:
-                _, ended = self._trail.hold(self._group_units[:, :, 0], self._units, self._actions)
-                if ended.any():  # the waiting steps of a decision that ended learn before the next one's
-                    self._learn_rounds(np.where(ended, self._trail.count, 0), self._all_trials, values)
             self._pending = True
             return self._actions.copy()
         if self._interpolated:
@@ -536,7 +513,6 @@ class SOMQLearner(MapLearner):
         if self._trail.n > 1:
             self._trail.push(self._observations, self._group_units, self._phi, self._units, self._actions, r, x_next)
             self._learn_rounds(self._trail.due_after_learn(bootstrap), bootstrap, values)
-            self._trail.end_decisions(~bootstrap)
         elif self.config.grouped:
             np.multiply(bootstrap, self.config.gamma, out=self._discounts)
             self._grouped_learn(r, x_next, self._discounts, self._all_trials, self._observations, self._group_units,

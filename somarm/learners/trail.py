@@ -19,16 +19,6 @@ reward. A step is learned from when one of these ends its wait:
 
 ``rounds`` gives the updates as rounds over the trials, oldest step first, each round one call of the
 grouped learn kernel with a per-trial return, discount (0: no bootstrap) and mask.
-
-**Holding an action in a cell** (``hold``). At a short time step the state often stays in one input unit
-for many steps. The one-step target of every action then bootstraps from that same unit's value, so the
-actions' values differ only by their immediate rewards, and the effect of an action on where the state goes
-next is lost. With ``hold``, the action chosen on entering a cell (the nearest unit of every map) is kept
-while the state stays in it, up to n steps: a decision lasts as long as the map cannot tell its states apart
-(a semi-Markov decision, Bradtke and Duff 1995; Sutton, Precup and Singh 1999). Every step waits until the
-decision ends, then learns towards the discounted rewards to the end of the decision and ``gamma^k max_a
-Q`` of the state where the next one starts (the chain-break rule above, applied at the cell's edge), or
-the n-step target where the decision lasts n steps.
 """
 
 from __future__ import annotations
@@ -66,23 +56,16 @@ class Trail:
         self.count = np.zeros(n_trials if slots else 0, dtype=np.int64)  #: each trial's waiting steps
         self._trials = np.arange(n_trials)
         self._powers = gamma ** np.arange(n + 1)
-        held = n_trials if slots else 0
-        self.held_cell = np.zeros((held, n_groups), dtype=np.int64)  #: each map's nearest unit at the decision
-        self.held_chosen = np.zeros(held, dtype=np.int64)  #: the decision's action unit
-        self.held_action = np.zeros((held, action_dim))  #: the decision's action
-        self.held_steps = np.zeros(held, dtype=np.int64)  #: steps taken under the decision (0: none in force)
 
     #: The arrays a learner saves and restores, by attribute name.
-    ARRAYS = ("observations", "units", "phi", "chosen", "actions", "rewards", "last", "count",
-              "held_cell", "held_chosen", "held_action", "held_steps")
+    ARRAYS = ("observations", "units", "phi", "chosen", "actions", "rewards", "last", "count")
 
     @staticmethod
     def floats(n: int, *, n_trials: int, obs_dim: int, action_dim: int, n_groups: int, k: int) -> int:
         """The numbers a trail of these sizes holds (for a learner's memory estimate)."""
         if n <= 1:
             return 0
-        return n * n_trials * (obs_dim + 2 * n_groups * k + action_dim + 2) + n_trials * (
-            obs_dim + n_groups + action_dim + 4)
+        return n * n_trials * (obs_dim + 2 * n_groups * k + action_dim + 2) + n_trials * (obs_dim + 1)
 
     def push(self, observations, units, phi, chosen, actions, rewards, next_observations) -> None:
         """Add the step just taken in every trial (the arrays of one ``act`` and its ``learn``)."""
@@ -106,32 +89,6 @@ class Trail:
         trials whose chain broke (the observation is not the last next observation), else none."""
         broken = (observations != self.last).any(axis=1)
         return np.where(broken, self.count, 0)
-
-    def hold(self, cells: np.ndarray, chosen: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Keep or end each trial's decision at an ``act`` whose maps' nearest units are ``cells``
-        ``(n_trials, n_groups)`` and whose fresh choice is ``chosen`` and ``actions`` (changed in place).
-
-        Returns:
-          ``(kept, ended)``: the trials that keep their decision (``chosen`` and ``actions`` set to it), and
-          those whose decision ended at a cell's edge while steps wait (they learn before the new one).
-        """
-        going = self.held_steps > 0
-        kept = going & (self.held_steps < self.n) & (cells == self.held_cell).all(axis=1)
-        ended = going & ~kept & (self.count > 0)
-        chosen[kept] = self.held_chosen[kept]
-        actions[kept] = self.held_action[kept]
-        fresh = ~kept
-        self.held_cell[fresh] = cells[fresh]
-        self.held_chosen[fresh] = chosen[fresh]
-        self.held_action[fresh] = actions[fresh]
-        self.held_steps[fresh] = 0
-        self.held_steps += 1
-        return kept, ended
-
-    def end_decisions(self, trials: np.ndarray) -> None:
-        """The decisions of ``trials`` end (a terminal step or a broken chain): their next act decides anew."""
-        if self.held_steps.size:
-            self.held_steps[trials] = 0
 
     def rounds(self, due: np.ndarray, bootstrap: np.ndarray) -> Iterator[Round]:
         """The updates of the ``due`` oldest steps of each trial, oldest first, one round per slot; the steps
