@@ -88,7 +88,8 @@ def main() -> None:
     for seed in (int(s) for s in args.seeds.split(",")):
         if not 100 <= seed <= 199:
             raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
-        params = record.complete(tasks.check_params(name, dict(given)), seed)
+        asked = presets.task_params_of(preset, args.task)  # how the preset scales its own task's observations
+        params = record.complete(tasks.check_params(name, {**asked, **given}), seed)
         train_params = {**params, **_task_set(args.train_task_set)}
         task, judge = tasks.make(name, seed=seed, **train_params), tasks.make(name, seed=seed, **params)
         starts = episode_starts(judge, args.episodes, seed)

@@ -160,6 +160,13 @@ _INVERTED_PENDULUM_SCALING = {"observation_ranges": {"0": [-1.0, 1.0], "1": [-0.
 _REACHER_SCALING = {"observation_ranges": {"6": [-5.0, 5.0], "7": [-5.0, 5.0], "8": [-0.2, 0.2], "9": [-0.2, 0.2]}}
 
 
+#: dmc:cartpole-balance's scaling: the region a balancing cart keeps to (the pole's sine within +-0.25, its
+#: angular velocity +-2 rad/s, the cart within +-1.5 m and +-1.5 m/s) instead of the random-action estimate,
+#: under which the pole mostly hangs and a balanced pole fills a few units of a map.
+_BALANCE_SCALING = {"observation_ranges": {"0": [-1.5, 1.5], "1": [-1.0, 1.0], "2": [-0.25, 0.25],
+                                           "3": [-1.5, 1.5], "4": [-2.0, 2.0]}}
+
+
 def _benchmark(name: str, env_id: str, changes: dict[str, object], task_params: dict | None = None) -> Preset:
     """A preset for a Gymnasium benchmark (``gym:ID``): the common recipe with ``changes``; the run
     length is the task's (``tasks.gym_envs.BENCHMARKS``), not the preset's."""
@@ -191,14 +198,19 @@ def _benchmarks() -> tuple[Preset, ...]:
         "k_nearest": 3, "local_linear": True, "shared_slopes": True, "n_a": Schedule(2.0), "n_step": 3}, _REACHER_SCALING)
     # The DeepMind Control Suite's report tasks (``tasks.gym_envs``' DMC_BENCHMARKS).
     dmc = Preset(
-        "dmc", "beyond the paper: the DeepMind Control Suite's one-torque tasks (dmc:cartpole-*, dmc:pendulum-swingup)",
+        "dmc", "beyond the paper: the DeepMind Control Suite's swing-ups (dmc:cartpole-swingup, dmc:pendulum-swingup)",
         dataclasses.replace(invertedpendulum.config, input_groups="all"),
-        "dmc:cartpole-balance", "none (the report's dmc part)", 5, None)
+        "dmc:cartpole-swingup", "none (the report's dmc part)", 5, None)
+    balance = Preset(
+        "dmc_balance", "beyond the paper: the DeepMind Control Suite's dmc:cartpole-balance",
+        dataclasses.replace(invertedpendulum.config, input_groups="2,4", local_linear=True, shared_slopes=True,
+                            n_step=30),
+        "dmc:cartpole-balance", "none (the report's dmc part)", 5, None, task_params=_BALANCE_SCALING)
     dmc_2d = Preset(
         "dmc_2d", "beyond the paper: the DeepMind Control Suite's two-force tasks (dmc:reacher-*, dmc:point_mass-easy)",
         dataclasses.replace(invertedpendulum.config, input_groups="all", action_shape=(3, 3), grid_span=1.0),
         "dmc:reacher-easy", "none (the report's dmc part)", 5, None)
-    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, dmc_2d
+    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d
 
 
 def _with_choices(presets: tuple[Preset, ...]) -> dict[str, Preset]:

@@ -97,7 +97,8 @@ _DEFAULT_STEPS = 100_000
 #: The suite tasks with presets of their own and default steps (the report part ``dmc``); any other
 #: ``dmc:`` task trains with the generic ``gym`` preset for ``_DEFAULT_STEPS`` steps.
 DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
-    **{name: ("dmc", 100_000) for name in ("dmc:cartpole-balance", "dmc:cartpole-swingup", "dmc:pendulum-swingup")},
+    "dmc:cartpole-balance": ("dmc_balance", 100_000),
+    **{name: ("dmc", 100_000) for name in ("dmc:cartpole-swingup", "dmc:pendulum-swingup")},
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:point_mass-easy")},
 }
 

@@ -10,7 +10,7 @@ from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table2+", "table5+"]
 BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
-SUITE = ["dmc", "dmc_2d"]
+SUITE = ["dmc", "dmc_balance", "dmc_2d"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
@@ -169,6 +169,15 @@ def test_the_suite_presets_are_the_invertedpendulum_recipe_with_one_map_over_eve
     assert presets.get("dmc_2d").grid_span == 1.0
 
 
+def test_the_balance_preset_maps_the_pole_alone_with_slopes_and_30_step_targets_over_the_balancing_region():
+    base, balance = presets.get("dmc").to_dict(), presets.get("dmc_balance").to_dict()
+    assert {key for key in base if base[key] != balance[key]} == {"input_groups", "local_linear", "shared_slopes", "n_step"}
+    assert (balance["input_groups"], balance["n_step"]) == ("2,4", 30)
+    ranges = presets.task_params_of("dmc_balance", "dmc:cartpole-balance")["observation_ranges"]
+    assert ranges["2"] == [-0.25, 0.25] and sorted(ranges) == ["0", "1", "2", "3", "4"]
+    assert presets.task_params_of("dmc_balance", "dmc:cartpole-swingup") == {}
+
+
 
 def test_every_preset_has_its_choices_from_the_data_file_and_every_section_names_a_preset():
     sections = choices.parse(choices.CHOICES_FILE.read_text(encoding="utf-8"))
@@ -202,4 +211,4 @@ def test_a_preset_asks_its_own_task_alone_for_its_scaling_as_a_copy():
     assert presets.task_params_of("reacher", "gym:Reacher-v5") == {"observation_ranges": {
         "6": [-5.0, 5.0], "7": [-5.0, 5.0], "8": [-0.2, 0.2], "9": [-0.2, 0.2]}}
     assert all(presets.task_params_of(name, preset.task) == {} for name, preset in presets.PRESETS.items()
-               if name not in ("invertedpendulum", "reacher"))
+               if name not in ("invertedpendulum", "reacher", "dmc_balance"))
