@@ -291,7 +291,7 @@ def _reported(ctx: Context, trained: Trained, *, name: str) -> Section:
         + f"; TD3 and SAC at seeds {_span(list(seeds[TASKS[0]].peers))}"
         + "; every learner scored on the same fresh episodes."
         + (" This report was written from the seed records in its folder: none was trained for it, and what is "
-           "missing is listed below." if recorded else ""),
+           "missing is listed above." if recorded else ""),
         f"somarm's learners train for their preset's run length ({ours} samples), one trial per seed; TD3 and SAC "
         f"for {fmt(budgets(ctx, TASKS[0])[1])} samples each with Stable-Baselines3's defaults (the RL Baselines3 Zoo "
         "tunes no suite task).",
