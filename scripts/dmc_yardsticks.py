@@ -43,7 +43,11 @@ BOUNDS = {
 }
 #: Per task: the action noise (sd) of the visited states, and the representations tried (preset changes).
 THROUGH = {
-    "dmc:cartpole-balance": (0.1, ["", "input_groups=2,4", "input_groups=2,3,4", "input_groups=2,4 input_shape=30x30"]),
+    "dmc:cartpole-balance": (0.1, [
+        "input_groups=all local_linear=false shared_slopes=false",  # the dmc preset's one map
+        "local_linear=false shared_slopes=false", "input_groups=2,3,4 local_linear=false shared_slopes=false",
+        "input_shape=30x30 local_linear=false shared_slopes=false", "", "shared_slopes=false",
+        "input_shape=10x10 action_slopes=true"]),
     "dmc:pendulum-swingup": (0.3, ["grid_span=1", "grid_span=1 input_shape=30x30", "grid_span=1 k_nearest=3"]),
     "dmc:point_mass-easy": (0.3, ["", "input_groups=0,2;1,3", "input_groups=0,2;1,3 k_nearest=3"]),
 }

@@ -198,7 +198,7 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
     it, learned on the controller's own ``states`` and ``torques`` (``controller_states``): each step one
     action unit is tried at random and rewarded ``-|a - torque|^2`` (gamma 0), so the greedy unit is the
     grid torque nearest the controller's as that representation sees the state (no neighbourhood over the
-    torques, which would blur their values together; Q starts at -1, below
+    torques, which would blur their values together; one-step targets, as gamma 0 looks no further; Q starts at -1, below
     what a tried torque earns, so a pair never tried is never the greedy one). Returns the learner's
     greedy policy over raw observations (``task.scale``). ``preset``: the preset changed (default: the
     benchmark's for ``env_id``; a suite task's registered id, ``somarm.tasks.dmc.gym_id``, names its own)."""
@@ -207,8 +207,8 @@ def through_representation(env_id: str, states: np.ndarray, torques: np.ndarray,
     from somarm.tasks import gym_envs
 
     config = presets.get(preset or gym_envs.BENCHMARKS[env_id][0]).with_changes(
-        {"gamma": 0.0, "p": 1.0, "p.decay": Constant(), "p.floor": 0.0, "epsilon": 0.0, "q_init": -1.0, "n_a": 0.0,
-         **changes})
+        {"gamma": 0.0, "n_step": 1, "p": 1.0, "p.decay": Constant(), "p.floor": 0.0, "epsilon": 0.0, "q_init": -1.0,
+         "n_a": 0.0, **changes})
     facts = gym_envs.describe(env_id)
     learner = make("somq", config, observation_low=np.zeros(states.shape[1]), observation_high=np.ones(states.shape[1]),
                    action_low=facts["action_low"], action_high=facts["action_high"], seed=seed)
