@@ -39,9 +39,12 @@ from somarm.tasks.dmc import SuiteEnv
 BOUNDS = {
     "dmc:cartpole-balance": ([-1.5, -1.0, -0.25, -1.5, -2.0], [1.5, 1.0, 0.25, 1.5, 2.0]),
     "dmc:pendulum-swingup": ([-1.0, -1.0, -10.0], [1.0, 1.0, 10.0]),
-    "dmc:point_mass-easy": ([-0.3, -0.3, -0.1, -0.1], [0.3, 0.3, 0.1, 0.1]),
+    "dmc:point_mass-easy": ([-0.03, -0.03, -0.1, -0.1], [0.03, 0.03, 0.1, 0.1]),
 }
-#: Per task: the action noise (sd) of the visited states, and the representations tried (preset changes).
+#: point_mass-easy's maps over the whole arena instead (a row of ``THROUGH`` may name other bounds).
+ARENA = ([-0.3, -0.3, -0.1, -0.1], [0.3, 0.3, 0.1, 0.1])
+#: Per task: the action noise (sd) of the visited states, and the representations tried (preset changes,
+#: with the observation bounds of their maps where not ``BOUNDS``).
 THROUGH = {
     "dmc:cartpole-balance": (0.1, [
         "input_groups=all local_linear=false shared_slopes=false",  # the dmc preset's one map
@@ -49,7 +52,7 @@ THROUGH = {
         "input_shape=30x30 local_linear=false shared_slopes=false", "", "shared_slopes=false",
         "input_shape=10x10 action_slopes=true"]),
     "dmc:pendulum-swingup": (0.3, ["grid_span=1", "grid_span=1 input_shape=30x30", "grid_span=1 k_nearest=3"]),
-    "dmc:point_mass-easy": (0.3, ["", "input_groups=0,2;1,3", "input_groups=0,2;1,3 k_nearest=3"]),
+    "dmc:point_mass-easy": (0.3, [("input_groups=all", ARENA), ("", ARENA), "", "k_nearest=3"]),
 }
 
 
@@ -148,21 +151,21 @@ def _through(task: str, law, args) -> list[dict]:
     from somarm.reproduce import yardsticks
     from somarm.tasks.dmc import gym_id, split_name
 
-    low, high = BOUNDS[task]
-    scaling = tasks.make(task, seed=args.seed, observation_low=low, observation_high=high)
     noise, representations = THROUGH[task]
-    states, actions = yardsticks.controller_states(gym_id(task), law, scaling, args.states, noise, args.seed)
     env = SuiteEnv(*split_name(task))
     rows = []
-    for text in representations:
+    for row in representations:
+        text, (low, high) = row if isinstance(row, tuple) else (row, BOUNDS[task])
+        scaling = tasks.make(task, seed=args.seed, observation_low=low, observation_high=high)
+        states, actions = yardsticks.controller_states(gym_id(task), law, scaling, args.states, noise, args.seed)
         changes = parse_settings(SOMQConfig, dict(item.split("=", 1) for item in text.split()))
         policy = yardsticks.through_representation(gym_id(task), states, actions, scaling, changes, args.seed,
                                                    preset=tasks.record(task).preset)
         rows.append({"task": task, "held by": f"the {tasks.record(task).preset} preset" + (f", {text}" if text else ""),
-                     "seed": args.seed, "states": args.states, "noise": noise,
+                     "bounds": [low, high], "seed": args.seed, "states": args.states, "noise": noise,
                      "returns": _returns(env, policy, args.episodes)})
+        scaling.close()
     env.close()
-    scaling.close()
     return rows
 
 

@@ -167,6 +167,13 @@ _BALANCE_SCALING = {"observation_ranges": {"0": [-1.5, 1.5], "1": [-1.0, 1.0], "
                                            "3": [-1.5, 1.5], "4": [-2.0, 2.0]}}
 
 
+#: dmc:point_mass-easy's scaling: the positions from +-3 cm (the target's 1.5 cm radius and the ring round it
+#: where its reward fades), the velocities from +-0.1 m/s; farther states fall past the maps' edge units, where
+#: the way to the target is the same push.
+_POINT_MASS_SCALING = {"observation_ranges": {"0": [-0.03, 0.03], "1": [-0.03, 0.03], "2": [-0.1, 0.1],
+                                              "3": [-0.1, 0.1]}}
+
+
 def _benchmark(name: str, env_id: str, changes: dict[str, object], task_params: dict | None = None) -> Preset:
     """A preset for a Gymnasium benchmark (``gym:ID``): the common recipe with ``changes``; the run
     length is the task's (``tasks.gym_envs.BENCHMARKS``), not the preset's."""
@@ -210,7 +217,11 @@ def _benchmarks() -> tuple[Preset, ...]:
         "dmc_2d", "beyond the paper: the DeepMind Control Suite's two-force tasks (dmc:reacher-*, dmc:point_mass-easy)",
         dataclasses.replace(invertedpendulum.config, input_groups="all", action_shape=(3, 3), grid_span=1.0),
         "dmc:reacher-easy", "none (the report's dmc part)", 5, None)
-    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d
+    point_mass = Preset(
+        "dmc_point_mass", "beyond the paper: the DeepMind Control Suite's dmc:point_mass-easy",
+        dataclasses.replace(dmc_2d.config, input_groups="0,2;1,3", n_step=30),
+        "dmc:point_mass-easy", "none (the report's dmc part)", 5, None, task_params=_POINT_MASS_SCALING)
+    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d, point_mass
 
 
 def _with_choices(presets: tuple[Preset, ...]) -> dict[str, Preset]:

@@ -44,10 +44,11 @@ TARGET_TASKS = ("dmc:cartpole-balance", "dmc:pendulum-swingup", "dmc:point_mass-
 TARGET_SHARE = 0.9
 #: Each task's seeds: somarm's learners at seeds no setting was scored on before the task's preset was fixed
 #: (the presets were tuned on seeds 100-199: docs/benchmarks/dmc/TUNING.md), 10-14, or 20-24 where the
-#: preset changed after 10-14 were scored (dmc:cartpole-balance's dmc_balance); TD3 and SAC at seeds 0-4
+#: preset changed after 10-14 were scored (dmc_balance, dmc_point_mass); TD3 and SAC at seeds 0-4
 #: (SB3's defaults: no setting of theirs chosen on any seed). A preset changed again goes to 30-34.
-SEEDS: dict[str, ReportSeeds] = {task: ReportSeeds(range(20, 25) if task == "dmc:cartpole-balance" else range(10, 15),
-                                                   range(0, 5)) for task in TASKS}
+SEEDS: dict[str, ReportSeeds] = {
+    task: ReportSeeds(range(20, 25) if task in ("dmc:cartpole-balance", "dmc:point_mass-easy") else range(10, 15),
+                      range(0, 5)) for task in TASKS}
 
 #: Fresh greedy episodes at the last rung (a fifth at the earlier ones): each is 1,000 steps of the suite, and
 #: the returns of one greedy policy vary far less between episodes than between seeds.
@@ -250,9 +251,12 @@ def _short(m: dict) -> list[str]:
               "of the law by imitation: they swing the pole up but cannot catch it, the catch lying in a few units of "
               "a map over the whole circle. The reward is sparse (the top 30 degrees alone): optimism alone never "
               "found it within 300,000 steps.",
-              "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7), but one map over "
-              "the four dimensions holds 0.5 of it by imitation, maps over each axis's position and velocity 237: the "
-              "target is 3 cm across in a 60 cm arena, and the law switches inside it.",
+              "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7). Maps scaled over "
+              "the arena cannot hold it (one map over the four dimensions 0.5 by imitation, a map per axis 237): the "
+              "target is 3 cm across in a 60 cm arena, and the law switches inside it. The dmc_point_mass preset's "
+              "maps, one per axis with the positions scaled from +-3 cm, hold 903.6; learning in them with 30-step "
+              "targets (the reward is the target alone) earned 393 and 452 on the tuning seeds, against 6.4 and 2.8 "
+              "for dmc_2d.",
               "- reacher-easy, reacher-hard and cartpole-swingup: no setting beyond the presets was tried on them."]
     return lines
 

@@ -10,7 +10,7 @@ from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table2+", "table5+"]
 BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
-SUITE = ["dmc", "dmc_balance", "dmc_2d"]
+SUITE = ["dmc", "dmc_balance", "dmc_2d", "dmc_point_mass"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
@@ -178,6 +178,14 @@ def test_the_balance_preset_maps_the_pole_alone_with_slopes_and_30_step_targets_
     assert presets.task_params_of("dmc_balance", "dmc:cartpole-swingup") == {}
 
 
+def test_the_point_mass_preset_maps_each_axis_with_n_step_targets_over_the_targets_neighbourhood():
+    base, point = presets.get("dmc_2d").to_dict(), presets.get("dmc_point_mass").to_dict()
+    assert {key for key in base if base[key] != point[key]} == {"input_groups", "n_step"}
+    assert (point["input_groups"], point["n_step"]) == ("0,2;1,3", 30)
+    ranges = presets.task_params_of("dmc_point_mass", "dmc:point_mass-easy")["observation_ranges"]
+    assert ranges["0"] == [-0.03, 0.03] and sorted(ranges) == ["0", "1", "2", "3"]
+
+
 
 def test_every_preset_has_its_choices_from_the_data_file_and_every_section_names_a_preset():
     sections = choices.parse(choices.CHOICES_FILE.read_text(encoding="utf-8"))
@@ -211,4 +219,4 @@ def test_a_preset_asks_its_own_task_alone_for_its_scaling_as_a_copy():
     assert presets.task_params_of("reacher", "gym:Reacher-v5") == {"observation_ranges": {
         "6": [-5.0, 5.0], "7": [-5.0, 5.0], "8": [-0.2, 0.2], "9": [-0.2, 0.2]}}
     assert all(presets.task_params_of(name, preset.task) == {} for name, preset in presets.PRESETS.items()
-               if name not in ("invertedpendulum", "reacher", "dmc_balance"))
+               if name not in ("invertedpendulum", "reacher", "dmc_balance", "dmc_point_mass"))
