@@ -33,7 +33,7 @@ import json
 import numpy as np
 import scipy.linalg
 
-from somarm.tasks.dmc import SuiteEnv
+from somarm.tasks.dmc import SuiteEnv, split_name
 
 #: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
 BOUNDS = {
@@ -149,21 +149,26 @@ def _through(task: str, law, args) -> list[dict]:
     from somarm.learners.settings import parse_settings
     from somarm.learners.somq import SOMQConfig
     from somarm.reproduce import yardsticks
-    from somarm.tasks.dmc import gym_id, split_name
+    from somarm.tasks.dmc import gym_id
 
     noise, representations = THROUGH[task]
     env = SuiteEnv(*split_name(task))
-    rows = []
+    rows, visited = [], {}  # the controller's states once per bounds: (scaling, states, actions)
     for row in representations:
         text, (low, high) = row if isinstance(row, tuple) else (row, BOUNDS[task])
-        scaling = tasks.make(task, seed=args.seed, observation_low=low, observation_high=high)
-        states, actions = yardsticks.controller_states(gym_id(task), law, scaling, args.states, noise, args.seed)
+        key = (tuple(low), tuple(high))
+        if key not in visited:
+            scaling = tasks.make(task, seed=args.seed, observation_low=low, observation_high=high)
+            visited[key] = (scaling, *yardsticks.controller_states(gym_id(task), law, scaling, args.states, noise,
+                                                                   args.seed))
+        scaling, states, actions = visited[key]
         changes = parse_settings(SOMQConfig, dict(item.split("=", 1) for item in text.split()))
         policy = yardsticks.through_representation(gym_id(task), states, actions, scaling, changes, args.seed,
                                                    preset=tasks.record(task).preset)
         rows.append({"task": task, "held by": f"the {tasks.record(task).preset} preset" + (f", {text}" if text else ""),
                      "bounds": [low, high], "seed": args.seed, "states": args.states, "noise": noise,
                      "returns": _returns(env, policy, args.episodes)})
+    for scaling, _, _ in visited.values():
         scaling.close()
     env.close()
     return rows
@@ -183,7 +188,7 @@ def main() -> None:
         if args.through:
             rows += _through(task, laws[0][1], args)
             continue
-        env = SuiteEnv(*task[len("dmc:"):].split("-", 1))
+        env = SuiteEnv(*split_name(task))
         rows += [{"task": task, "controller": what, "returns": _returns(env, law, args.episodes)} for what, law in laws]
         env.close()
     for row in rows:
