@@ -219,7 +219,7 @@ def _benchmarks() -> tuple[Preset, ...]:
         "dmc:reacher-easy", "none (the report's dmc part)", 5, None)
     point_mass = Preset(
         "dmc_point_mass", "beyond the paper: the DeepMind Control Suite's dmc:point_mass-easy",
-        dataclasses.replace(dmc_2d.config, input_groups="0,2;1,3", n_step=30),
+        dataclasses.replace(dmc_2d.config, input_groups="0,2;1,3", n_step=30, action_gap=0.5),
         "dmc:point_mass-easy", "none (the report's dmc part)", 5, None, task_params=_POINT_MASS_SCALING)
     return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d, point_mass
 

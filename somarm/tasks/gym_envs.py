@@ -100,7 +100,7 @@ DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
     "dmc:cartpole-balance": ("dmc_balance", 100_000),
     **{name: ("dmc", 100_000) for name in ("dmc:cartpole-swingup", "dmc:pendulum-swingup")},
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard")},
-    "dmc:point_mass-easy": ("dmc_point_mass", 100_000),
+    "dmc:point_mass-easy": ("dmc_point_mass", 300_000),
 }
 
 class BoxScaling:
