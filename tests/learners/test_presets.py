@@ -3,6 +3,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from somarm import tasks
 from somarm.learners import choices, presets
 from somarm.learners.motoric import MotoricConfig
 from somarm.learners.schedules import ExponentialDecay, InverseDecay, Schedule
@@ -178,12 +179,13 @@ def test_the_balance_preset_maps_the_pole_alone_with_slopes_and_30_step_targets_
     assert presets.task_params_of("dmc_balance", "dmc:cartpole-swingup") == {}
 
 
-def test_the_point_mass_preset_maps_each_axis_with_n_step_targets_over_the_targets_neighbourhood():
+def test_the_point_mass_preset_maps_each_axis_with_n_step_advantage_targets_over_the_targets_neighbourhood():
     base, point = presets.get("dmc_2d").to_dict(), presets.get("dmc_point_mass").to_dict()
-    assert {key for key in base if base[key] != point[key]} == {"input_groups", "n_step"}
-    assert (point["input_groups"], point["n_step"]) == ("0,2;1,3", 30)
+    assert {key for key in base if base[key] != point[key]} == {"input_groups", "n_step", "action_gap"}
+    assert (point["input_groups"], point["n_step"], point["action_gap"]) == ("0,2;1,3", 30, 0.5)
     ranges = presets.task_params_of("dmc_point_mass", "dmc:point_mass-easy")["observation_ranges"]
     assert ranges["0"] == [-0.03, 0.03] and sorted(ranges) == ["0", "1", "2", "3"]
+    assert tasks.record("dmc:point_mass-easy").n_steps == 300_000
 
 
 
