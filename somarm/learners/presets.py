@@ -174,6 +174,11 @@ _POINT_MASS_SCALING = {"observation_ranges": {"0": [-0.03, 0.03], "1": [-0.03, 0
                                               "3": [-0.1, 0.1]}}
 
 
+#: dmc:pendulum-swingup's scaling: the whole circle and +-10 rad/s (random torques never raise the pole, so
+#: the ranges they see end below the rewarded top).
+_PENDULUM_SCALING = {"observation_ranges": {"0": [-1.0, 1.0], "1": [-1.0, 1.0], "2": [-10.0, 10.0]}}
+
+
 def _benchmark(name: str, env_id: str, changes: dict[str, object], task_params: dict | None = None) -> Preset:
     """A preset for a Gymnasium benchmark (``gym:ID``): the common recipe with ``changes``; the run
     length is the task's (``tasks.gym_envs.BENCHMARKS``), not the preset's."""
@@ -221,7 +226,11 @@ def _benchmarks() -> tuple[Preset, ...]:
         "dmc_point_mass", "beyond the paper: the DeepMind Control Suite's dmc:point_mass-easy",
         dataclasses.replace(dmc_2d.config, input_groups="0,2;1,3", n_step=30, action_gap=0.5),
         "dmc:point_mass-easy", "none (the report's dmc part)", 5, None, task_params=_POINT_MASS_SCALING)
-    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d, point_mass
+    swingup = Preset(
+        "dmc_pendulum", "beyond the paper: the DeepMind Control Suite's dmc:pendulum-swingup",
+        dataclasses.replace(dmc.config, input_shape=(30, 30), grid_span=1.0, n_step=30, action_gap=0.5),
+        "dmc:pendulum-swingup", "none (the report's dmc part)", 5, None, task_params=_PENDULUM_SCALING)
+    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d, point_mass, swingup
 
 
 def _with_choices(presets: tuple[Preset, ...]) -> dict[str, Preset]:

@@ -11,7 +11,7 @@ from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table2+", "table5+"]
 BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
-SUITE = ["dmc", "dmc_balance", "dmc_2d", "dmc_point_mass"]
+SUITE = ["dmc", "dmc_balance", "dmc_2d", "dmc_point_mass", "dmc_pendulum"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
@@ -188,6 +188,16 @@ def test_the_point_mass_preset_maps_each_axis_with_n_step_advantage_targets_over
     assert tasks.record("dmc:point_mass-easy").n_steps == 300_000
 
 
+def test_the_pendulum_preset_spans_the_circle_and_the_whole_torque_box_with_n_step_advantage_targets():
+    base, swing = presets.get("dmc").to_dict(), presets.get("dmc_pendulum").to_dict()
+    assert {key for key in base if base[key] != swing[key]} == {"input_shape", "grid_span", "n_step", "action_gap"}
+    assert (swing["grid_span"], swing["n_step"], swing["action_gap"]) == (1.0, 30, 0.5)
+    ranges = presets.task_params_of("dmc_pendulum", "dmc:pendulum-swingup")["observation_ranges"]
+    assert ranges == {"0": [-1.0, 1.0], "1": [-1.0, 1.0], "2": [-10.0, 10.0]}
+    assert tasks.record("dmc:pendulum-swingup").preset == "dmc_pendulum"
+    assert tasks.record("dmc:cartpole-swingup").preset == "dmc"
+
+
 
 def test_every_preset_has_its_choices_from_the_data_file_and_every_section_names_a_preset():
     sections = choices.parse(choices.CHOICES_FILE.read_text(encoding="utf-8"))
@@ -221,4 +231,4 @@ def test_a_preset_asks_its_own_task_alone_for_its_scaling_as_a_copy():
     assert presets.task_params_of("reacher", "gym:Reacher-v5") == {"observation_ranges": {
         "6": [-5.0, 5.0], "7": [-5.0, 5.0], "8": [-0.2, 0.2], "9": [-0.2, 0.2]}}
     assert all(presets.task_params_of(name, preset.task) == {} for name, preset in presets.PRESETS.items()
-               if name not in ("invertedpendulum", "reacher", "dmc_balance", "dmc_point_mass"))
+               if name not in ("invertedpendulum", "reacher", "dmc_balance", "dmc_point_mass", "dmc_pendulum"))
