@@ -66,7 +66,9 @@ def _measured(somq, sac):
     seeds = {"somq": list(range(10, 15)), "somq+": list(range(10, 15))}
     if sac is not None:
         final["sac"], seeds["sac"] = (sac, 2.0), [0, 1]
-    return {task: {"final": final, "seeds": seeds, "sac": sac, "random": 1.0} for task in dmc.TARGET_TASKS}
+    budget = {kind: 100_000 for kind in final}
+    return {task: {"final": final, "seeds": seeds, "budget": budget, "sac": sac, "random": 1.0}
+            for task in dmc.TARGET_TASKS}
 
 
 @pytest.mark.parametrize("somq, sac, holds", [(950.0, 1000.0, True), (899.0, 1000.0, False), (900.0, 1000.0, True),
@@ -85,7 +87,8 @@ def test_report_seeds_of_the_part_are_fresh_and_a_changed_preset_takes_seeds_its
         assert isinstance(seeds, ReportSeeds)
         assert not set(seeds.ours) & set(range(100, 200)) and not set(seeds.peers) & set(range(100, 200))
     assert dmc.SEEDS["dmc:cartpole-balance"].ours == range(20, 25) and dmc.SEEDS["dmc:reacher-easy"].ours == range(10, 15)
-    assert dmc.SEEDS["dmc:point_mass-easy"].ours == range(20, 25)
+    assert dmc.SEEDS["dmc:point_mass-easy"].ours == range(30, 35)
+    assert dmc.SEEDS["dmc:pendulum-swingup"].ours == range(20, 25)
 
 
 def test_a_report_of_the_suite_alone_is_titled_and_sourced_as_the_suites():
@@ -97,3 +100,22 @@ def test_a_report_of_the_suite_alone_is_titled_and_sourced_as_the_suites():
                             benchmarks_only=True, suite_only=True)
     assert "DeepMind Control Suite's own tasks" in header[0] and "Gymnasium's own environment" not in header[0]
     assert report.SUITE_TITLE != report.BENCHMARKS_TITLE
+
+
+def _learner(samples, returns, seeds):
+    return {"samples": samples, "return": returns, "seeds": seeds, "seconds_per_sample": [1e-3] * len(seeds),
+            "wall_seconds": [[0.1 * s] * len(seeds) for s in samples]}
+
+
+def test_claims_name_each_sides_samples_and_the_peers_last_rungs_are_reported():
+    results = {"dmc:point_mass-easy": {"random_action_return": 1.0, "learners": {
+        "somq": _learner([100, 300], [[1.0, 3.0], [85.0, 95.0]], [30, 31]),
+        "somq+": _learner([100, 300], [[1.0, 3.0], [70.0, 80.0]], [30, 31]),
+        "sac": _learner([50, 100], [[10.0, 30.0], [100.0, 100.0]], [0, 1])}}}
+    m = dmc.measure(results)
+    assert m["dmc:point_mass-easy"]["before_last"]["sac"] == (50, 20.0)
+    claims = {c.claim.split(" reaches")[0].split(": ")[1]: c for c in dmc._claims(m)
+              if "point_mass" in c.claim}
+    assert claims["SOM-Q"].holds is True and claims["SOM-Q+ (interpolated)"].holds is False  # 90 >= 90 > 75
+    assert "after 300 samples" in claims["SOM-Q"].measured and "after 100 samples" in claims["SOM-Q"].measured
+    assert dmc._trend(m)[2:] == ["- dmc:point_mass-easy: SB3 SAC 20.0 at 50 samples, 100.0 at 100"]

@@ -35,21 +35,3 @@ def test_the_part_runs_end_to_end_in_quick_mode_on_one_task(tmp_path, monkeypatc
 def test_the_part_runs_end_to_end_in_quick_mode(tmp_path):
     _end_to_end(tmp_path)
 
-
-def _learner(samples, returns, seeds):
-    return {"samples": samples, "return": returns, "seeds": seeds, "seconds_per_sample": [1e-3] * len(seeds),
-            "wall_seconds": [[0.1 * s] * len(seeds) for s in samples]}
-
-
-def test_claims_name_each_sides_samples_and_the_peers_last_rungs_are_reported():
-    results = {"dmc:point_mass-easy": {"random_action_return": 1.0, "learners": {
-        "somq": _learner([100, 300], [[1.0, 3.0], [85.0, 95.0]], [30, 31]),
-        "somq+": _learner([100, 300], [[1.0, 3.0], [70.0, 80.0]], [30, 31]),
-        "sac": _learner([50, 100], [[10.0, 30.0], [100.0, 100.0]], [0, 1])}}}
-    m = dmc.measure(results)
-    assert m["dmc:point_mass-easy"]["before_last"]["sac"] == (50, 20.0)
-    claims = {c.claim.split(" reaches")[0].split(": ")[1]: c for c in dmc._claims(m)
-              if "point_mass" in c.claim}
-    assert claims["SOM-Q"].holds is True and claims["SOM-Q+ (interpolated)"].holds is False  # 90 >= 90 > 75
-    assert "after 300 samples" in claims["SOM-Q"].measured and "after 100 samples" in claims["SOM-Q"].measured
-    assert dmc._trend(m)[2:] == ["- dmc:point_mass-easy: SB3 SAC 20.0 at 50 samples, 100.0 at 100"]
