@@ -206,10 +206,8 @@ def _trend(m: dict) -> list[str]:
                 final = data["final"][kind][0]
                 lines.append(f"- {task}: {NAMES[kind]} {before:.1f} at {fmt(samples)} samples, {final:.1f} at "
                              f"{fmt(data['budget'][kind])}")
-    if not lines:
-        return []
-    return ["The peers' last two rungs (a rise there means the budget, not the learner, set the final return; "
-            "the published runs below go on to 1,000,000 steps):", "", *lines]
+    return _headed("The peers' last two rungs (a rise there means the budget, not the learner, set the final "
+                   "return; the published runs below go on to 1,000,000 steps):", lines)
 
 
 def _missing(m: dict, seeds: dict[str, ReportSeeds], tasks: tuple[str, ...]) -> list[str]:
@@ -222,10 +220,13 @@ def _missing(m: dict, seeds: dict[str, ReportSeeds], tasks: tuple[str, ...]) -> 
             if len(have) < len(want):
                 lines.append(f"- {task}: {NAMES[kind]} at {len(have)} of {len(want)} seeds "
                              f"({'seeds ' + _span(have) if have else 'no seed'} recorded)")
-    if not lines:
-        return []
-    return ["Missing from this report (`reproduce --only dmc --resume` with the same output folder trains them; "
-            "TD3 and SAC take about 20 ms a sample on one core, half an hour or more a seed):", "", *lines]
+    return _headed("Missing from this report (`reproduce --only dmc --resume` with the same output folder trains "
+                   "them; TD3 and SAC take about 20 ms a sample on one core, half an hour or more a seed):", lines)
+
+
+def _headed(header: str, lines: list[str]) -> list[str]:
+    """``lines`` under ``header`` and a blank line; nothing without lines."""
+    return [header, "", *lines] if lines else []
 
 
 def _published(tasks: tuple[str, ...]) -> list[str]:
