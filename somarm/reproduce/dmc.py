@@ -23,13 +23,13 @@ import numpy as np
 
 from somarm.peers import compare
 from somarm.peers.plot import NAMES
-from somarm.reproduce.benchmarks import ReportSeeds, compare_groups, reach
+from somarm.reproduce.benchmarks import ReportSeeds, compare_groups
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 
 __all__ = ["TASKS", "LEARNERS", "PEER_SAMPLES", "TARGET_TASKS", "TARGET_SHARE", "OUR_SEEDS", "SEEDS", "EPISODES", "PUBLISHED", "SOURCE",
-           "budgets", "recorded_seeds", "train", "measure", "dmc", "dmc_recorded", "Trained", "PARTS"]
+           "budgets", "recorded_seeds", "train", "measure", "reach_held", "dmc", "dmc_recorded", "Trained", "PARTS"]
 
 #: The suite tasks of the part.
 TASKS = ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:cartpole-balance", "dmc:cartpole-swingup",
@@ -137,11 +137,23 @@ def measure(results: dict[str, dict]) -> dict:
             "before_last": {k: (int(v["samples"][-2]), float(np.mean(v["return"][-2])))
                             for k, v in learners.items() if len(v["samples"]) > 1},
             "sac": sac,
-            "to_share": {k: None if sac is None else reach(v, TARGET_SHARE * sac) for k, v in learners.items()},
+            "to_share": {k: None if sac is None else reach_held(v, TARGET_SHARE * sac) for k, v in learners.items()},
             "per_sample": {k: float(np.median(v["seconds_per_sample"])) for k, v in learners.items()},
             "random": result["random_action_return"],
         }
     return out
+
+
+def reach_held(data: dict, target: float) -> tuple[int, float] | None:
+    """The first rung from which the mean return over seeds stays at or above ``target`` to the last:
+    (samples, median seconds); None if the last rung is below it. An early greedy policy can pass the target
+    by chance and lose it as it learns."""
+    means = np.mean(np.array(data["return"]), axis=1)
+    below = np.flatnonzero(means < target)
+    first = 0 if not below.size else int(below[-1]) + 1
+    if first == len(means):
+        return None
+    return data["samples"][first], float(np.median(np.array(data["wall_seconds"])[first]))
 
 
 def _claims(m: dict) -> list[Claim]:
@@ -185,7 +197,7 @@ def _reached(cell: tuple[int, float] | None) -> str:
 
 
 def _table(m: dict) -> list[str]:
-    lines = ["| task | learner | seeds | samples | final return (mean ± sd) | to 90% of SAC's final | ms per sample |",
+    lines = ["| task | learner | seeds | samples | final return (mean ± sd) | to 90% of SAC's final, and held | ms per sample |",
              "|---|---|---|---|---|---|---|"]
     for task, data in m.items():
         for kind, (mean, sd) in data["final"].items():
@@ -276,7 +288,10 @@ def _short(m: dict) -> list[str]:
               "a map over the whole circle. The reward is sparse (the top 30 degrees alone): optimism alone never "
               "found it within 300,000 steps. The dmc_pendulum preset (the whole box, a 30x30 map, 30-step "
               "targets and advantage learning) learned the catch at one tuning seed of four (196.7; 0.0, 0.0 "
-              "and 2.1 at the others), as SAC found it at two of its five seeds.",
+              "and 2.1 at the others), as SAC found it at two of its five seeds. On the report's seeds its greedy "
+              "policies earned 77-81 at 2,000 and 5,000 samples, before learning, and lost it as they learned. A "
+              "constant full torque earns 10.5 (-1) and 11.7 (+1) over the suite's episodes 0-29 (its best "
+              "episodes 55-75), pushing nothing 0.6: SAC's 23.6 is twice that.",
               "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7). Maps scaled over "
               "the arena cannot hold it (one map over the four dimensions 0.5 by imitation, a map per axis 237): the "
               "target is 3 cm across in a 60 cm arena, and the law switches inside it. The dmc_point_mass preset's "
