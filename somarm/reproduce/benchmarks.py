@@ -151,10 +151,16 @@ def compare_groups(ctx: Context, task: str, groups: list[tuple[tuple[str, ...], 
     return merged
 
 
-def reach(data: dict, target: float) -> tuple[int, float] | None:
-    """The first rung where the mean return over seeds reaches ``target``: (samples, median seconds)."""
+def reach(data: dict, target: float, *, held: bool = False) -> tuple[int, float] | None:
+    """The first rung where the mean return over seeds reaches ``target``: (samples, median seconds). With
+    ``held``, the first rung from which it stays at or above ``target`` to the last (None if the last is
+    below it): an early greedy policy can pass the target by chance and lose it as it learns."""
     means = np.mean(np.array(data["return"]), axis=1)
-    reached = np.flatnonzero(means >= target)
+    if held:
+        below = np.flatnonzero(means < target)
+        reached = np.arange(below[-1] + 1 if below.size else 0, len(means))
+    else:
+        reached = np.flatnonzero(means >= target)
     if not reached.size:
         return None
     return data["samples"][reached[0]], float(np.median(np.array(data["wall_seconds"])[reached[0]]))

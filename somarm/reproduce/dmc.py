@@ -23,13 +23,13 @@ import numpy as np
 
 from somarm.peers import compare
 from somarm.peers.plot import NAMES
-from somarm.reproduce.benchmarks import ReportSeeds, compare_groups
+from somarm.reproduce.benchmarks import ReportSeeds, compare_groups, reach
 from somarm.reproduce.common import Context, fmt
 from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 
 __all__ = ["TASKS", "LEARNERS", "PEER_SAMPLES", "TARGET_TASKS", "TARGET_SHARE", "OUR_SEEDS", "SEEDS", "EPISODES", "PUBLISHED", "SOURCE",
-           "budgets", "recorded_seeds", "train", "measure", "reach_held", "dmc", "dmc_recorded", "Trained", "PARTS"]
+           "budgets", "recorded_seeds", "train", "measure", "dmc", "dmc_recorded", "Trained", "PARTS"]
 
 #: The suite tasks of the part.
 TASKS = ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:cartpole-balance", "dmc:cartpole-swingup",
@@ -137,23 +137,11 @@ def measure(results: dict[str, dict]) -> dict:
             "before_last": {k: (int(v["samples"][-2]), float(np.mean(v["return"][-2])))
                             for k, v in learners.items() if len(v["samples"]) > 1},
             "sac": sac,
-            "to_share": {k: None if sac is None else reach_held(v, TARGET_SHARE * sac) for k, v in learners.items()},
+            "to_share": {k: None if sac is None else reach(v, TARGET_SHARE * sac, held=True) for k, v in learners.items()},
             "per_sample": {k: float(np.median(v["seconds_per_sample"])) for k, v in learners.items()},
             "random": result["random_action_return"],
         }
     return out
-
-
-def reach_held(data: dict, target: float) -> tuple[int, float] | None:
-    """The first rung from which the mean return over seeds stays at or above ``target`` to the last:
-    (samples, median seconds); None if the last rung is below it. An early greedy policy can pass the target
-    by chance and lose it as it learns."""
-    means = np.mean(np.array(data["return"]), axis=1)
-    below = np.flatnonzero(means < target)
-    first = 0 if not below.size else int(below[-1]) + 1
-    if first == len(means):
-        return None
-    return data["samples"][first], float(np.median(np.array(data["wall_seconds"])[first]))
 
 
 def _claims(m: dict) -> list[Claim]:

@@ -123,7 +123,8 @@ def test_claims_name_each_sides_samples_and_the_peers_last_rungs_are_reported():
 
 def test_the_share_counts_as_reached_only_from_the_rung_it_is_held_to_the_end():
     early = _learner([100, 200, 300, 400], [[30.0, 30.0], [5.0, 5.0], [25.0, 25.0], [30.0, 30.0]], [0, 1])
-    assert dmc.reach_held(early, 20.0) == (300, 30.0)  # 100 passes, 200 drops back: not reached there
+    assert benchmarks.reach(early, 20.0, held=True) == (300, 30.0)  # 100 passes, 200 drops back: not reached there
     lost = _learner([100, 200], [[30.0, 30.0], [5.0, 5.0]], [0, 1])
-    assert dmc.reach_held(lost, 20.0) is None
-    assert dmc.reach_held(_learner([100, 200], [[30.0, 30.0], [25.0, 25.0]], [0, 1]), 20.0) == (100, 10.0)
+    assert benchmarks.reach(lost, 20.0, held=True) is None
+    kept = _learner([100, 200], [[30.0, 30.0], [25.0, 25.0]], [0, 1])
+    assert benchmarks.reach(kept, 20.0, held=True) == (100, 10.0)

@@ -34,4 +34,3 @@ def test_the_part_runs_end_to_end_in_quick_mode_on_one_task(tmp_path, monkeypatc
 @pytest.mark.slow
 def test_the_part_runs_end_to_end_in_quick_mode(tmp_path):
     _end_to_end(tmp_path)
-
