@@ -101,7 +101,7 @@ DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
     "dmc:cartpole-swingup": ("dmc", 100_000),
     "dmc:pendulum-swingup": ("dmc_pendulum", 100_000),
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard")},
-    "dmc:point_mass-easy": ("dmc_point_mass", 300_000),
+    "dmc:point_mass-easy": ("dmc_point_mass", 600_000),
 }
 
 class BoxScaling:

@@ -185,7 +185,7 @@ def test_the_point_mass_preset_maps_each_axis_with_n_step_advantage_targets_over
     assert (point["input_groups"], point["n_step"], point["action_gap"]) == ("0,2;1,3", 30, 0.5)
     ranges = presets.task_params_of("dmc_point_mass", "dmc:point_mass-easy")["observation_ranges"]
     assert ranges["0"] == [-0.03, 0.03] and sorted(ranges) == ["0", "1", "2", "3"]
-    assert tasks.record("dmc:point_mass-easy").n_steps == 300_000
+    assert tasks.record("dmc:point_mass-easy").n_steps == 600_000
 
 
 def test_the_pendulum_preset_spans_the_circle_and_the_whole_torque_box_with_n_step_advantage_targets():

@@ -86,3 +86,23 @@ def test_a_preset_with_n_step_targets_learns_a_controller_by_imitation_and_follo
     learned = np.array([policy(o)[0] for o in scaling.unscale(states[-500:])])
     # dmc_balance's 30-step targets are set aside (gamma 0); a learner that held nothing would not follow the law
     assert np.corrcoef(learned, actions[-500:, 0])[0, 1] > 0.6
+
+
+def test_the_cart_replay_finds_the_rail_before_the_fall_under_a_constant_push_and_neither_at_rest():
+    replay = _script("dmc_cart_replay").replay
+    from somarm.tasks.dmc import SuiteEnv
+
+    env = SuiteEnv("cartpole", "balance")
+    pushed, = replay(env, lambda o: 1.0, 1)
+    assert pushed["rail_m"] == pytest.approx(1.8)
+    assert pushed["mean_abs_force"] == pytest.approx(1.0)
+    assert pushed["cart_max_m"] >= pushed["rail_m"] - 0.05 and pushed["cart_at_rail_step"] is not None
+    assert pushed["pole_fell_step"] is not None and pushed["cart_at_rail_step"] < 1000
+    lqr_gain = _script("dmc_yardsticks")._cartpole_gain(env)
+
+    def lqr(o):
+        x, cos, sin, xdot, thetadot = o
+        return np.clip(-lqr_gain @ np.array([x, np.arctan2(sin, cos), xdot, thetadot]), -1, 1)
+
+    held, = replay(env, lqr, 1)
+    assert held["cart_at_rail_step"] is None and held["pole_fell_step"] is None and held["return"] > 990.0

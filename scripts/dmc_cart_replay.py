@@ -1,0 +1,85 @@
+"""Where a learned greedy cart goes on dmc:cartpole-balance: train the task's preset (or ``--preset``,
+changed by ``--set KEY=VALUE``) for ``--samples`` steps at a tuning seed, then replay its greedy policy
+(the interpolated response, SOM-Q+) over the suite's episodes 0 to ``--episodes`` - 1 and print, per
+episode, the return, how far the cart went, the first step it came within 5 cm of the end of its rail,
+the first step the pole fell below horizontal, and the mean absolute force. One JSON line per episode.
+Used by docs/benchmarks/dmc/TUNING.md.
+
+    python scripts/dmc_cart_replay.py --seed 100 --samples 100000
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from somarm import tasks
+from somarm.learners import presets
+from somarm.tasks.dmc import SuiteEnv
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from tune_benchmark import _train, learner_for  # noqa: E402  (how the tuning scripts train)
+
+TASK = "dmc:cartpole-balance"
+
+
+def _first(mask: np.ndarray) -> int | None:
+    return int(np.argmax(mask)) if mask.any() else None
+
+
+def replay(env: SuiteEnv, policy, episodes: int) -> list[dict]:
+    """``policy`` (observation -> action) on cartpole-balance ``env`` over its episodes 0 to ``episodes`` - 1:
+    per episode the return, the rail's end, how far the cart went, the first step it came within 5 cm of
+    the rail's end, the first step the pole fell below horizontal, and the mean absolute force."""
+    rail = float(env.physics.named.model.jnt_range["slider"][1])
+    rows = []
+    for episode in range(episodes):
+        observation, _ = env.reset(seed=episode)
+        total, carts, cosines, forces = 0.0, [], [], []
+        done = False
+        while not done:
+            action = np.asarray(policy(observation), dtype=float).reshape(-1)
+            observation, reward, terminated, truncated, _ = env.step(action)
+            total += reward
+            done = terminated or truncated
+            carts.append(float(env.physics.named.data.qpos["slider"][0]))
+            cosines.append(float(env.physics.pole_angle_cosine()[0]))
+            forces.append(abs(float(action[0])))
+        carts, cosines = np.abs(carts), np.asarray(cosines)
+        rows.append({"episode": episode, "return": round(total, 1), "rail_m": rail,
+                     "cart_max_m": round(float(carts.max()), 3), "cart_at_rail_step": _first(carts > rail - 0.05),
+                     "pole_fell_step": _first(cosines < 0), "mean_abs_force": round(float(np.mean(forces)), 3)})
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=100, help="a tuning seed (100-199)")
+    parser.add_argument("--samples", type=int, default=100_000)
+    parser.add_argument("--episodes", type=int, default=5)
+    parser.add_argument("--preset", default=None, help="default: the task's")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    args = parser.parse_args()
+    if not 100 <= args.seed <= 199:
+        raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
+    preset = args.preset or tasks.record(TASK).preset
+    settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in args.set))
+    params = tasks.record(TASK).complete(tasks.check_params(TASK, presets.task_params_of(preset, TASK)), args.seed)
+    task = tasks.make(TASK, seed=args.seed, **params)
+    learner = learner_for(task, settings, args.seed)
+    _train(task, learner, args.samples)
+    env = SuiteEnv("cartpole", "balance")
+    policy = lambda o: np.asarray(learner.predict(task.scale(o)[None])[0]).reshape(-1)  # noqa: E731
+    for row in replay(env, policy, args.episodes):
+        print(json.dumps({"seed": args.seed, "preset": preset, "settings": args.set, "samples": args.samples, **row}),
+              flush=True)
+    env.close()
+    task.close()
+
+
+if __name__ == "__main__":
+    main()
