@@ -37,7 +37,7 @@ def compare_figure(result: dict[str, Any], path: str | Path) -> Path:
         samples = np.array(data["samples"])
         walls = np.median(np.array(data["wall_seconds"]), axis=1)
         median, low, high = np.median(errors, axis=1), errors.min(axis=1), errors.max(axis=1)
-        label = NAMES.get(kind, kind) + ("" if same else f" ({counts[kind]} seeds)")
+        label = NAMES.get(kind, kind) + ("" if same else f" ({counts[kind]} seed{'' if counts[kind] == 1 else 's'})")
         for ax, x in ((by_samples, samples), (by_time, walls)):
             ax.plot(x, median, "o-", color=COLOURS.get(kind, "k"), label=label, ms=3)
             ax.fill_between(x, low, high, color=COLOURS.get(kind, "k"), alpha=0.15, lw=0)

@@ -241,10 +241,11 @@ def _published(tasks: tuple[str, ...]) -> list[str]:
     return lines
 
 
-def _short(m: dict) -> list[str]:
-    """Where SOM-Q stops short: its better response's final return against random actions and against the
-    published SAC mean at ``PEER_SAMPLES`` steps (another implementation, so a yardstick, not a verdict)."""
-    lines = ["Where SOM-Q stops short (its better response; the published SAC runs are another implementation "
+def _standing(m: dict) -> list[str]:
+    """Where SOM-Q stands and why: its better response's final return against random actions and against the
+    published SAC mean at ``PEER_SAMPLES`` steps (another implementation, so a yardstick, not a verdict),
+    then why each task ends where it does, from the tuning record and the yardsticks."""
+    lines = ["Where SOM-Q stands (its better response; the published SAC runs are another implementation "
              "and seed set, so this is a yardstick, not a verdict):", ""]
     for task, data in m.items():
         kind = max(("somq", "somq+"), key=lambda k: data["final"][k][0])
@@ -254,7 +255,7 @@ def _short(m: dict) -> list[str]:
                    f"{mean / np.mean(published):.0%}" if published and np.mean(published) > 0 else
                    "; no published SAC return at this budget")
         lines.append(f"- {task}: {NAMES[kind]} {mean:.1f}, random actions {data['random']:.1f}{against}")
-    lines += ["", "Why, from the tuning record (docs/benchmarks/dmc/TUNING.md: every setting tried on tuning seeds 100-103 "
+    lines += ["", "Why each task ends where it does (and, where SOM-Q stops short, what was tried), from the tuning record (docs/benchmarks/dmc/TUNING.md: every setting tried on tuning seeds 100-103 "
               "with its return) and the yardsticks of scripts/dmc_yardsticks.py, which replay fixed controllers and, "
               "with --through, each controller as SOM-Q's maps hold it when they learn it by imitation (what learning "
               "could find at best in a representation):",
@@ -333,7 +334,7 @@ def _reported(ctx: Context, trained: Trained, *, name: str) -> Section:
         section.notes += ["", *trend]
     if missing := _missing(m, seeds, TASKS):
         section.notes += ["", *missing]
-    section.notes += ["", *_short(m), "", *_published(TASKS)]
+    section.notes += ["", *_standing(m), "", *_published(TASKS)]
     ours = ", ".join(f"{task} {fmt(budgets(ctx, task)[0])}" for task in TASKS)
     section.choices += [
         "SOM-Q and SOM-Q+ at seeds no setting was scored on before the task's preset was fixed (tuned on seeds "

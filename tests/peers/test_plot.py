@@ -28,3 +28,8 @@ def test_learners_on_different_seed_sets_are_labelled_with_their_own_counts(monk
 def test_learners_on_one_seed_set_name_it_once_in_the_title(monkeypatch):
     title, labels = _drawn(monkeypatch, _result({"somq": 5, "td3": 5}))
     assert "median over 5 seeds" in title and not any("seeds)" in label for label in labels)
+
+
+def test_a_curve_of_one_seed_says_seed_not_seeds(monkeypatch):
+    _, labels = _drawn(monkeypatch, _result({"somq": 5, "td3": 1}))
+    assert any(label.endswith("(1 seed)") for label in labels) and not any("(1 seeds)" in label for label in labels)
