@@ -22,6 +22,7 @@ from somarm.learners import presets
 from somarm.tasks.dmc import SuiteEnv
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from dmc_yardsticks import _returns  # noqa: E402  (how the yardsticks play a suite episode)
 from tune_benchmark import _train, learner_for  # noqa: E402  (how the tuning scripts train)
 
 TASK = "dmc:cartpole-balance"
@@ -36,23 +37,20 @@ def replay(env: SuiteEnv, policy, episodes: int) -> list[dict]:
     per episode the return, the rail's end, how far the cart went, the first step it came within 5 cm of
     the rail's end, the first step the pole fell below horizontal, and the mean absolute force."""
     rail = float(env.physics.named.model.jnt_range["slider"][1])
+    seen = [([], [], []) for _ in range(episodes)]
+
+    def watch(episode, env, action):
+        carts, cosines, forces = seen[episode]
+        carts.append(abs(float(env.physics.named.data.qpos["slider"][0])))
+        cosines.append(float(env.physics.pole_angle_cosine()[0]))
+        forces.append(abs(float(np.asarray(action, dtype=float).reshape(-1)[0])))
+
     rows = []
-    for episode in range(episodes):
-        observation, _ = env.reset(seed=episode)
-        total, carts, cosines, forces = 0.0, [], [], []
-        done = False
-        while not done:
-            action = np.asarray(policy(observation), dtype=float).reshape(-1)
-            observation, reward, terminated, truncated, _ = env.step(action)
-            total += reward
-            done = terminated or truncated
-            carts.append(float(env.physics.named.data.qpos["slider"][0]))
-            cosines.append(float(env.physics.pole_angle_cosine()[0]))
-            forces.append(abs(float(action[0])))
-        carts, cosines = np.abs(carts), np.asarray(cosines)
-        rows.append({"episode": episode, "return": round(total, 1), "rail_m": rail,
+    for episode, total in enumerate(_returns(env, policy, episodes, watch)):
+        carts, cosines = np.asarray(seen[episode][0]), np.asarray(seen[episode][1])
+        rows.append({"episode": episode, "return": total, "rail_m": rail,
                      "cart_max_m": round(float(carts.max()), 3), "cart_at_rail_step": _first(carts > rail - 0.05),
-                     "pole_fell_step": _first(cosines < 0), "mean_abs_force": round(float(np.mean(forces)), 3)})
+                     "pole_fell_step": _first(cosines < 0), "mean_abs_force": round(float(np.mean(seen[episode][2])), 3)})
     return rows
 
 

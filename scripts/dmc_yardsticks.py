@@ -56,15 +56,20 @@ THROUGH = {
 }
 
 
-def _returns(env: SuiteEnv, policy, episodes: int) -> list[float]:
+def _returns(env: SuiteEnv, policy, episodes: int, watch=None) -> list[float]:
+    """``policy``'s return on each of ``env``'s episodes 0 to ``episodes`` - 1; ``watch(episode, env, action)``,
+    if given, after every step."""
     out = []
     for episode in range(episodes):
         observation, _ = env.reset(seed=episode)
         total, done = 0.0, False
         while not done:
-            observation, reward, terminated, truncated, _ = env.step(np.atleast_1d(policy(observation)))
+            action = np.atleast_1d(policy(observation))
+            observation, reward, terminated, truncated, _ = env.step(action)
             total += reward
             done = terminated or truncated
+            if watch is not None:
+                watch(episode, env, action)
         out.append(round(total, 1))
     return out
 
