@@ -172,8 +172,12 @@ def test_the_suite_presets_are_the_invertedpendulum_recipe_with_one_map_over_eve
 
 def test_the_balance_preset_maps_the_pole_alone_with_slopes_and_30_step_targets_over_the_balancing_region():
     base, balance = presets.get("dmc").to_dict(), presets.get("dmc_balance").to_dict()
-    assert {key for key in base if base[key] != balance[key]} == {"input_groups", "local_linear", "shared_slopes", "n_step"}
-    assert (balance["input_groups"], balance["n_step"]) == ("2,4", 30)
+    assert {key for key in base if base[key] != balance[key]} == {"input_groups", "input_shape", "local_linear",
+                                                                  "shared_slopes", "n_step", "alpha"}
+    assert (balance["input_groups"], balance["input_shape"], balance["n_step"]) == ("2,4", [30, 30], 30)
+    alpha = presets.get("dmc_balance").alpha  # the dmc preset's step size without its floor: it falls to 0
+    assert alpha.floor == 0.0 and alpha.value(1_000_000) < 0.02 < presets.get("dmc").alpha.value(1_000_000)
+    assert tasks.record("dmc:cartpole-balance").n_steps == 1_000_000
     ranges = presets.task_params_of("dmc_balance", "dmc:cartpole-balance")["observation_ranges"]
     assert ranges["2"] == [-0.25, 0.25] and sorted(ranges) == ["0", "1", "2", "3", "4"]
     assert presets.task_params_of("dmc_balance", "dmc:cartpole-swingup") == {}

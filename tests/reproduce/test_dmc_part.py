@@ -31,32 +31,32 @@ def test_somarms_learners_train_on_the_fresh_seeds_and_each_peer_alone_on_its_ow
     calls, ctx = faked
     results = dmc.train(ctx, dmc.SEEDS, 100, ("dmc:cartpole-balance",))
     assert [c.learners for c in calls] == [("somq", "somq+"), ("td3",), ("sac",)]
-    assert [(c.seed, c.seeds) for c in calls] == [(20, 5), (0, 5), (0, 5)]  # dmc_balance's fresh seeds
+    assert [(c.seed, c.seeds) for c in calls] == [(30, 5), (0, 5), (0, 5)]  # dmc_balance's fresh seeds
     assert all(c.task == "dmc:cartpole-balance" and c.eval_seed == 0 for c in calls)
     assert calls[1].peer_samples == dmc.PEER_SAMPLES and calls[0].peer_samples is None
     merged = results["dmc:cartpole-balance"]
-    assert merged["learners"]["somq"]["seeds"] == list(range(20, 25))
+    assert merged["learners"]["somq"]["seeds"] == list(range(30, 35))
     assert merged["learners"]["sac"]["seeds"] == list(range(5))
 
 
 def test_a_recorded_report_reads_each_group_at_its_recorded_seeds_and_trains_none(faked):
     calls, ctx = faked
     folder = ctx.out_dir / "dmc" / "cartpole-balance"
-    for group, kinds, seeds in (("sac", ("sac",), (0, 1, 3)), ("somq-somq+", ("somq", "somq+"), (20, 21, 22))):
+    for group, kinds, seeds in (("sac", ("sac",), (0, 1, 3)), ("somq-somq+", ("somq", "somq+"), (30, 31, 32))):
         (folder / group / "seeds").mkdir(parents=True)
         for kind in kinds:
             for seed in seeds:  # sac's seed 2 is missing: its recorded seeds stop at 1
                 (folder / group / "seeds" / f"{kind}-{seed}.json").write_text("{}")
-    (folder / "somq-somq+" / "seeds" / "somq+-22.json").unlink()  # both responses are needed at a seed
+    (folder / "somq-somq+" / "seeds" / "somq+-32.json").unlink()  # both responses are needed at a seed
     results = dmc.train(ctx, dmc.SEEDS, 100, ("dmc:cartpole-balance", "dmc:reacher-easy"), recorded=True)
-    assert [(c.learners, c.seed, c.seeds) for c in calls] == [(("somq", "somq+"), 20, 2), (("sac",), 0, 2)]
+    assert [(c.learners, c.seed, c.seeds) for c in calls] == [(("somq", "somq+"), 30, 2), (("sac",), 0, 2)]
     assert list(results) == ["dmc:cartpole-balance"]  # no record of reacher-easy: left out
     m = dmc.measure(results)
     assert m["dmc:cartpole-balance"]["seeds"]["sac"] == [0, 1] and "td3" not in m["dmc:cartpole-balance"]["seeds"]
     missing = dmc._missing(m, dmc.SEEDS, ("dmc:cartpole-balance", "dmc:reacher-easy"))
     assert "- dmc:reacher-easy: no seed recorded" in missing
     assert any("SB3 TD3 at 0 of 5 seeds" in line for line in missing)
-    assert any("SOM-Q at 2 of 5 seeds (seeds 20-21 recorded)" in line for line in missing)
+    assert any("SOM-Q at 2 of 5 seeds (seeds 30-31 recorded)" in line for line in missing)
     claims = dmc._claims(m)
     assert [c.holds for c in claims if "point_mass" in c.claim] == [None, None]
 
@@ -86,7 +86,7 @@ def test_report_seeds_of_the_part_are_fresh_and_a_changed_preset_takes_seeds_its
     for seeds in dmc.SEEDS.values():
         assert isinstance(seeds, ReportSeeds)
         assert not set(seeds.ours) & set(range(100, 200)) and not set(seeds.peers) & set(range(100, 200))
-    assert dmc.SEEDS["dmc:cartpole-balance"].ours == range(20, 25) and dmc.SEEDS["dmc:reacher-easy"].ours == range(10, 15)
+    assert dmc.SEEDS["dmc:cartpole-balance"].ours == range(30, 35) and dmc.SEEDS["dmc:reacher-easy"].ours == range(10, 15)
     assert dmc.SEEDS["dmc:point_mass-easy"].ours == range(40, 45)
     assert dmc.SEEDS["dmc:pendulum-swingup"].ours == range(20, 25)
 
