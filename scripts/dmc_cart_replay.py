@@ -45,7 +45,7 @@ def replay(env: SuiteEnv, policy, episodes: int) -> list[dict]:
         carts, cosines, forces = seen[episode]
         carts.append(abs(float(env.physics.named.data.qpos["slider"][0])))
         cosines.append(float(env.physics.pole_angle_cosine()[0]))
-        forces.append(abs(float(np.asarray(action, dtype=float).reshape(-1)[0])))
+        forces.append(abs(float(action[0])))  # _returns passes the action as a 1-d array
 
     rows = []
     for episode, total in enumerate(_returns(env, policy, episodes, watch)):
