@@ -7,7 +7,10 @@ dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episode
   the 11 forces of the ``dmc`` preset's grid (a sixth of the action box) and to 11 over the whole box.
 - pendulum-swingup: energy pumping (``u = clip(5 w (E* - E))``, E the pole's energy from the suite's
   mass, length and gravity, E* upright at rest) and a PD catch (``u = clip(-10 theta - 2 w)``) once the
-  pole is within 18 degrees of upright; rounded to the ``dmc`` preset's 11 torques and to 11 over the box.
+  pole is within 18 degrees of upright; rounded to the ``dmc`` preset's 11 torques and to 11 over the box;
+  the latter read at the centre of each state's cell of a uniform grid over angle and velocity
+  (``on_grid``: what a fixed table of that many cells could hold); the catch alone, no torque farther than
+  45 degrees from upright (what a policy earns that holds the pole only where an episode starts near it).
 - point_mass-easy: the PD law ``u = clip(-50 x - 10 v)`` and the same rounded to the 3x3 grid of
   ``dmc_2d`` (-1, 0, 1 per axis).
 
@@ -22,7 +25,7 @@ from what Q-learning finds in them.
 Prints one JSON line per row. Used by docs/benchmarks/dmc/TUNING.md.
 
     python scripts/dmc_yardsticks.py --episodes 5
-    python scripts/dmc_yardsticks.py --through --seed 100 --states 50000
+    python scripts/dmc_yardsticks.py --through --seed 100 --states 50000 [--task dmc:pendulum-swingup]
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import json
 import numpy as np
 import scipy.linalg
 
+from somarm.reproduce.yardsticks import pendulum_hold
 from somarm.tasks.dmc import SuiteEnv, split_name
 
 #: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
@@ -51,7 +55,12 @@ THROUGH = {
         "local_linear=false shared_slopes=false", "input_groups=2,3,4 local_linear=false shared_slopes=false",
         "input_shape=30x30 local_linear=false shared_slopes=false", "", "shared_slopes=false",
         "input_shape=10x10 action_slopes=true"]),
-    "dmc:pendulum-swingup": (0.3, ["grid_span=1", "grid_span=1 input_shape=30x30", "grid_span=1 k_nearest=3"]),
+    "dmc:pendulum-swingup": (0.3, [
+        "grid_span=1", "grid_span=1 input_shape=30x30", "grid_span=1 k_nearest=3",
+        "local_linear=true shared_slopes=true", "local_linear=true shared_slopes=true action_slopes=true",
+        "input_shape=10x10 local_linear=true shared_slopes=true action_slopes=true", "input_groups=1,2",
+        ("", ([-1.0, -1.0, -4.0], [1.0, 1.0, 4.0])), ("", ([0.5, -1.0, -5.0], [1.0, 1.0, 5.0])),
+        ("", ([0.8, -0.6, -4.0], [1.0, 0.6, 4.0]))]),
     "dmc:point_mass-easy": (0.3, [("input_groups=all", ARENA), ("", ARENA), "", "k_nearest=3"]),
 }
 
@@ -119,6 +128,17 @@ def _swing_up(env: SuiteEnv):
     return law
 
 
+def on_grid(law, angles: int, speeds: int, top_speed: float = 10.0):
+    """``law`` over (cos, sin, angular velocity) read at the centre of the observation's cell of a uniform
+    ``angles`` x ``speeds`` grid over the angle and the velocity (+-``top_speed``, the outer cells open)."""
+    def held(o: np.ndarray) -> np.ndarray:
+        i = np.floor((np.arctan2(o[1], o[0]) + np.pi) / (2 * np.pi) * angles)
+        angle = -np.pi + (min(i, angles - 1) + 0.5) * 2 * np.pi / angles
+        j = np.clip(np.floor((o[2] + top_speed) / (2 * top_speed) * speeds), 0, speeds - 1)
+        return law(np.array([np.cos(angle), np.sin(angle), -top_speed + (j + 0.5) * 2 * top_speed / speeds]))
+    return held
+
+
 def controllers() -> dict[str, list[tuple[str, object]]]:
     """Per task: (what, policy) of every fixed controller, the first of each the one ``--through`` holds."""
     sixth, whole = np.linspace(-1 / 6, 1 / 6, 11), np.linspace(-1.0, 1.0, 11)
@@ -142,7 +162,11 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
         "dmc:pendulum-swingup": [
             ("energy pumping and PD catch rounded to 11 torques over the box", lambda o: _rounded(swing(o), whole)),
             ("energy pumping and PD catch", swing),
-            ("energy pumping and PD catch rounded to the dmc preset's 11 torques", lambda o: _rounded(swing(o), sixth))],
+            ("energy pumping and PD catch rounded to the dmc preset's 11 torques", lambda o: _rounded(swing(o), sixth)),
+            ("energy pumping and PD catch rounded to 11 torques over the box, on a 30x30 grid over angle and velocity",
+             on_grid(lambda o: _rounded(swing(o), whole), 30, 30)),
+            ("the PD catch alone within 45 degrees of upright, no torque elsewhere (pendulum_hold)",
+             lambda o: pendulum_hold(o[None])[0])],
         "dmc:point_mass-easy": [
             ("PD rounded to the dmc_2d preset's 3x3 grid", lambda o: np.round(pd(o))), ("PD", pd)],
     }
@@ -185,11 +209,14 @@ def main() -> None:
     parser.add_argument("--through", action="store_true", help="each controller as SOM-Q's maps hold it")
     parser.add_argument("--seed", type=int, default=100, help="with --through: a tuning seed (100-199)")
     parser.add_argument("--states", type=int, default=50_000, help="with --through: the controller's states learned")
+    parser.add_argument("--task", choices=list(BOUNDS), default=None, help="one task's rows (default: every task's)")
     args = parser.parse_args()
     if args.through and not 100 <= args.seed <= 199:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     rows = []
     for task, laws in controllers().items():
+        if args.task not in (None, task):
+            continue
         if args.through:
             rows += _through(task, laws[0][1], args)
             continue

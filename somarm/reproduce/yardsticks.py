@@ -16,6 +16,10 @@ The controllers are this project's:
 
 - InvertedPendulum-v5: a linear state feedback, ``u = K . obs``, with gains found by a random search
   over linear policies (they balance all 1,000 steps).
+- dm_control's pendulum-swingup (``pendulum_hold``): a PD law on the pole's angle from upright, ``u =
+  clip(-10 theta - 2 omega)``, within 45 degrees of upright and no torque elsewhere. It never swings the
+  pole up: it holds it only in the episodes that start near upright (the suite starts the pole at a random
+  angle), so it tells what a return earned that way is worth.
 - Reacher-v5: a Jacobian-transpose PD law on the fingertip-to-target vector of the observation,
   ``u = kp J(q)^T (target - tip) - kd qdot``, with the arm's link lengths from the model (0.1, 0.11);
   and a joint-space PD law, ``u = kp (q* - q) - kd qdot``, q* the target's inverse kinematics (the
@@ -32,7 +36,7 @@ import numpy as np
 from somarm.learners.somq import paper_representation
 
 __all__ = ["INVERTED_PENDULUM_GAINS", "REACHER_GAINS", "REACHER_JOINT_GAINS", "REACHER_CONTROLLERS", "ENVIRONMENTS", "REPRESENTATIONS", "mean_return", "round_to",
-           "cell_centre", "learned_map", "controller_map", "controller_states", "through_map", "through_representation", "inverted_pendulum", "reacher", "measure", "table"]
+           "cell_centre", "pendulum_hold", "learned_map", "controller_map", "controller_states", "through_map", "through_representation", "inverted_pendulum", "reacher", "measure", "table"]
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
@@ -87,6 +91,16 @@ def cell_centre(policy: Policy, low: np.ndarray, high: np.ndarray, cells: int) -
         u = np.clip((obs - low) / span, 0.0, 1.0)
         return policy(low + span * np.round(u * (cells - 1)) / (cells - 1))
     return centred
+
+
+def pendulum_hold(obs: np.ndarray) -> np.ndarray:
+    """The pendulum-swingup hold: observations ``(n, 3)`` of the suite's pendulum (cosine and sine of the
+    pole's angle from upright, its angular velocity) to torques ``(n, 1)``: ``clip(-10 theta - 2 omega)``
+    within 45 degrees of upright, 0 elsewhere."""
+    obs = np.asarray(obs, dtype=np.float64)
+    angle = np.arctan2(obs[:, 1], obs[:, 0])
+    near = obs[:, 0] > np.cos(np.pi / 4)
+    return np.where(near, np.clip(-10.0 * angle - 2.0 * obs[:, 2], -1.0, 1.0), 0.0)[:, None]
 
 
 def learned_map(env_id: str, steps: int, seed: int):

@@ -106,3 +106,39 @@ def test_the_cart_replay_finds_the_rail_before_the_fall_under_a_constant_push_an
 
     held, = replay(env, lqr, 1)
     assert held["cart_at_rail_step"] is None and held["pole_fell_step"] is None and held["return"] > 990.0
+
+
+def test_the_swing_up_law_on_a_uniform_30x30_grid_still_lifts_the_pendulum_and_a_coarse_grid_does_not():
+    yardsticks = _script("dmc_yardsticks")
+    laws = dict(yardsticks.controllers()["dmc:pendulum-swingup"])
+    from somarm.tasks.dmc import SuiteEnv
+
+    env = SuiteEnv("pendulum", "swingup")
+    law = laws["energy pumping and PD catch rounded to 11 torques over the box"]
+    assert laws["energy pumping and PD catch rounded to 11 torques over the box, on a 30x30 grid over angle and "
+                "velocity"] is not law
+    assert yardsticks._returns(env, yardsticks.on_grid(law, 30, 30), 1)[0] >= 600.0
+    assert yardsticks._returns(env, yardsticks.on_grid(law, 10, 10), 1)[0] < 600.0  # the bound can fail
+
+
+def test_the_pendulum_hold_keeps_the_pole_up_from_near_upright_and_never_lifts_it_from_below():
+    from somarm.reproduce.yardsticks import pendulum_hold
+    from somarm.tasks.dmc import SuiteEnv, flatten
+
+    env = SuiteEnv("pendulum", "swingup")
+    totals = {}
+    for start in (0.1, np.pi - 0.1):  # the hinge angle from upright (the suite's 0)
+        env.reset(seed=0)
+        with env.physics.reset_context():
+            env.physics.named.data.qpos["hinge"] = start
+            env.physics.named.data.qvel["hinge"] = 0.0
+        observation = flatten(env.environment.task.get_observation(env.physics))
+        total = 0.0
+        for _ in range(1000):
+            observation, reward, _, _, _ = env.step(pendulum_hold(observation[None])[0])
+            total += reward
+        totals[start] = total
+    env.close()
+    assert totals[0.1] >= 990.0
+    assert totals[np.pi - 0.1] == 0.0
+    assert pendulum_hold(np.array([[np.cos(1.0), np.sin(1.0), 0.0]]))[0, 0] == 0.0  # 57 degrees out: no torque
