@@ -8,9 +8,9 @@ dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episode
 - pendulum-swingup: energy pumping (``u = clip(5 w (E* - E))``, E the pole's energy from the suite's
   mass, length and gravity, E* upright at rest) and a PD catch (``u = clip(-10 theta - 2 w)``) once the
   pole is within 18 degrees of upright; rounded to the ``dmc`` preset's 11 torques and to 11 over the box;
-  the latter read at the centre of each state's cell of a uniform grid over angle and velocity
-  (``on_grid``: what a fixed table of that many cells could hold); the catch alone, no torque farther than
-  45 degrees from upright (what a policy earns that holds the pole only where an episode starts near it).
+  the latter read at the centre of each state's cell of a uniform 30x30 or 10x10 grid over angle and
+  velocity (``on_grid``: cells evenly spread); the catch alone, no torque farther than 45 degrees from
+  upright (``pendulum_hold``: what a policy earns that holds the pole only where an episode starts near it).
 - point_mass-easy: the PD law ``u = clip(-50 x - 10 v)`` and the same rounded to the 3x3 grid of
   ``dmc_2d`` (-1, 0, 1 per axis).
 
@@ -20,7 +20,9 @@ action unit a step, rewarded by minus its squared distance from the controller's
 ``--states`` states the controller visits with action noise, from tuning seed ``--seed``; each
 representation is the task's preset changed as its row says, over the task's observation bounds
 (``BOUNDS``). The returns are the learned greedy policies'. This tells apart what the maps can hold
-from what Q-learning finds in them.
+from what Q-learning finds in them. For the tasks of ``AT_UNITS`` also the controller itself read at the
+nearest unit of a map of each shape learned on its own states (``somarm.reproduce.yardsticks.controller_map``,
+the best case for a map of that size): where the units lie, apart from learning the actions.
 
 Prints one JSON line per row. Used by docs/benchmarks/dmc/TUNING.md.
 
@@ -63,6 +65,9 @@ THROUGH = {
         ("", ([0.8, -0.6, -4.0], [1.0, 0.6, 4.0]))]),
     "dmc:point_mass-easy": (0.3, [("input_groups=all", ARENA), ("", ARENA), "", "k_nearest=3"]),
 }
+
+#: The map shapes the controller is read through at its nearest unit, per task (with ``--through``).
+AT_UNITS = {"dmc:pendulum-swingup": [(30, 30), (50, 50)]}
 
 
 def _returns(env: SuiteEnv, policy, episodes: int, watch=None) -> list[float]:
@@ -165,6 +170,8 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
             ("energy pumping and PD catch rounded to the dmc preset's 11 torques", lambda o: _rounded(swing(o), sixth)),
             ("energy pumping and PD catch rounded to 11 torques over the box, on a 30x30 grid over angle and velocity",
              on_grid(lambda o: _rounded(swing(o), whole), 30, 30)),
+            ("energy pumping and PD catch rounded to 11 torques over the box, on a 10x10 grid over angle and velocity",
+             on_grid(lambda o: _rounded(swing(o), whole), 10, 10)),
             ("the PD catch alone within 45 degrees of upright, no torque elsewhere (pendulum_hold)",
              lambda o: pendulum_hold(o[None])[0])],
         "dmc:point_mass-easy": [
@@ -197,6 +204,13 @@ def _through(task: str, law, args) -> list[dict]:
         rows.append({"task": task, "held by": f"the {tasks.record(task).preset} preset" + (f", {text}" if text else ""),
                      "bounds": [low, high], "seed": args.seed, "states": args.states, "noise": noise,
                      "returns": _returns(env, policy, args.episodes)})
+    for shape in AT_UNITS.get(task, []):
+        scaling = tasks.make(task, seed=args.seed, observation_low=BOUNDS[task][0], observation_high=BOUNDS[task][1])
+        units = yardsticks.controller_map(gym_id(task), law, scaling, shape, args.states, noise, args.seed)
+        rows.append({"task": task, "held by": f"the controller itself at the nearest unit of a {shape[0]}x{shape[1]} "
+                     "map learned on its states", "bounds": list(BOUNDS[task]), "seed": args.seed, "states": args.states,
+                     "noise": noise, "returns": _returns(env, yardsticks.through_map(law, scaling, units), args.episodes)})
+        scaling.close()
     for scaling, _, _ in visited.values():
         scaling.close()
     env.close()

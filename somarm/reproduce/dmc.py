@@ -4,7 +4,8 @@ Six suite tasks (``dmc:DOMAIN-TASK``, ``somarm.tasks.dmc``), each a comparison t
 ``somarm.peers.compare``: SOM-Q and SOM-Q+ at ``SEEDS.ours`` for their preset's run length, TD3 and
 SAC (Stable-Baselines3 with its defaults, on the suite through this project's own Gymnasium adapter)
 at ``SEEDS.peers`` for ``PEER_SAMPLES`` each, every learner scored by the mean undiscounted return of
-its greedy policy over the same fresh episodes. Every seed of every learner is kept as it finishes
+its greedy policy over the same fresh episodes, where a fixed controller (``REPLAYED``) is replayed
+too, to tell what a return is of. Every seed of every learner is kept as it finishes
 (``seeds/`` in each comparison's folder), so ``reproduce --only dmc --resume`` goes on where a
 stopped run ended; TD3 and SAC take a gradient step per sample, so their seeds take far longer than SOM-Q's.
 
@@ -30,7 +31,7 @@ from somarm.reproduce.experiment import Experiment
 from somarm.reproduce.report import Claim, Section
 
 __all__ = ["TASKS", "LEARNERS", "PEER_SAMPLES", "TARGET_TASKS", "TARGET_SHARE", "OUR_SEEDS", "SEEDS", "EPISODES", "PUBLISHED", "SOURCE",
-           "HELD", "budgets", "recorded_seeds", "train", "held", "measure", "dmc", "dmc_recorded", "Trained", "PARTS"]
+           "REPLAYED", "budgets", "recorded_seeds", "train", "replayed", "measure", "dmc", "dmc_recorded", "Trained", "PARTS"]
 
 #: The suite tasks of the part.
 TASKS = ("dmc:reacher-easy", "dmc:reacher-hard", "dmc:cartpole-balance", "dmc:cartpole-swingup",
@@ -73,10 +74,12 @@ PUBLISHED: dict[str, dict[int, tuple[float, float, float]]] = {
 }
 
 
-#: Fixed controllers replayed on a task's own scored episodes, beside its learners: what a return earned their
-#: way is worth. pendulum-swingup: holding the pole only where an episode starts near upright
-#: (``yardsticks.pendulum_hold``), which never swings it up.
-HELD = {"dmc:pendulum-swingup": yardsticks.pendulum_hold}
+#: Fixed controllers replayed on a task's own scored episodes beside its learners, each with what it does:
+#: what a return earned their way is worth. pendulum-swingup: holding the pole only where an episode starts
+#: near upright (``yardsticks.pendulum_hold``), which never swings it up.
+REPLAYED = {"dmc:pendulum-swingup": (
+    "holding the pole only where an episode starts near upright (a PD law within 45 degrees of upright, no "
+    "torque elsewhere: it never swings the pole up)", yardsticks.pendulum_hold)}
 
 
 def budgets(ctx: Context, task: str) -> tuple[int, int]:
@@ -123,30 +126,46 @@ def train(ctx: Context, seeds: dict[str, ReportSeeds], episodes: int, tasks: tup
             if len(side):
                 groups.append((learners, peer_samples, side))
         merged = compare_groups(ctx, task, groups, folder, samples=ours, episodes=episodes,
-                                task_params=ctx.pick({}, dict(QUICK_PARAMS)))
+                                task_params=_task_params(ctx))
         if merged:
             results[task] = merged
     return results
 
 
-def held(ctx: Context, episodes: int) -> dict[str, float]:
-    """Each ``HELD`` controller's mean return over its task's scored episodes (the comparisons' own scorer:
-    the same reset seeds as every learner's last rung)."""
+def _task_params(ctx: Context) -> dict:
+    """The task parameters every comparison of the part runs with (quick mode: a second of the suite's time)."""
+    return ctx.pick({}, dict(QUICK_PARAMS))
+
+
+def _replay(score, policy) -> tuple[float, float]:
+    """``policy`` (raw observations to actions) scored by ``score`` (a comparison's scorer, which hands scaled
+    ones): on the last rung's episodes and on the fifth of them the earlier rungs score."""
+    def scaled(x):
+        return policy(score.task.unscale(x))
+    return score(scaled), score(scaled, last=False)
+
+
+def replayed(ctx: Context, episodes: int, tasks: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+    """Each ``REPLAYED`` controller of ``tasks``: its mean return over its task's scored episodes, through the
+    comparisons' own scorer (``compare_groups``' reset seeds, drawn from ``ctx.seed``), at every learner's last
+    rung and at the earlier rungs (a fifth of the episodes)."""
     out = {}
-    for task, law in HELD.items():
+    for task in tasks:
+        if task not in REPLAYED:
+            continue
         config = compare.CompareConfig(task=task, learners=("somq",), seeds=1, seed=SEEDS[task].ours.start,
-                                       episodes=episodes, eval_seed=ctx.seed, task_params=ctx.pick({}, dict(QUICK_PARAMS)))
+                                       episodes=episodes, eval_seed=ctx.seed, task_params=_task_params(ctx))
         score = compare.make_plan(config).scorer()
         try:
-            out[task] = score(lambda x, s=score, held_by=law: held_by(s.task.unscale(x)))
+            out[task] = _replay(score, REPLAYED[task][1])
         finally:
             score.task.close()
     return out
 
 
 def measure(results: dict[str, dict]) -> dict:
-    """Per task: each learner's final return (mean, sd over its seeds), its seeds, SAC's final mean (None
-    without a SAC seed), and the samples and seconds each learner takes to reach ``TARGET_SHARE`` of it."""
+    """Per task: each learner's final return (mean, sd over its seeds; ``per_seed``: at each seed), its seeds,
+    SAC's final mean (None without a SAC seed), and the samples and seconds each learner takes to reach ``TARGET_SHARE`` of it."""
     out = {}
     for task, result in results.items():
         learners = result["learners"]
@@ -265,20 +284,24 @@ def _published(tasks: tuple[str, ...]) -> list[str]:
 
 
 def _above(data: dict, bound: float) -> str:
-    """How many of every learner's seeds end above ``bound``: "no seed", "1 seed of N", "K seeds of N"."""
+    """How many of every learner's seeds end above ``bound``, as a clause: "no seed ends", "1 seed of N ends",
+    "K seeds of N end"."""
     finals = [x for each in data["per_seed"].values() for x in each]
     count = sum(x > bound for x in finals)
-    return "no seed" if count == 0 else f"{count} seed{'s' if count > 1 else ''} of {len(finals)}"
+    return ("no seed ends" if count == 0 else f"1 seed of {len(finals)} ends" if count == 1
+            else f"{count} seeds of {len(finals)} end")
 
 
 def _seeds_of(data: dict, kind: str) -> str:
+    """One learner's final return at each of its seeds, named: "SB3 SAC 15.6, 98.8, ..."."""
     return f"{NAMES[kind]} " + ", ".join(f"{x:.1f}" for x in data["per_seed"][kind])
 
 
-def _standing(m: dict, held: dict[str, float]) -> list[str]:
+def _standing(m: dict, replays: dict[str, tuple[float, float]]) -> list[str]:
     """Where SOM-Q stands and why: its better response's final return against random actions and against the
     published SAC mean at ``PEER_SAMPLES`` steps (another implementation, so a yardstick, not a verdict), and
-    where a ``HELD`` controller was replayed, what it earns on the same episodes beside every seed's return;
+    where a ``REPLAYED`` controller was replayed (``replays``), what it earns on the same episodes beside every
+    seed's return;
     then why each task ends where it does, from the tuning record and the yardsticks."""
     lines = ["Where SOM-Q stands (its better response; the published SAC runs are another implementation "
              "and seed set, so this is a yardstick, not a verdict):", ""]
@@ -290,10 +313,12 @@ def _standing(m: dict, held: dict[str, float]) -> list[str]:
                    f"{mean / np.mean(published):.0%}" if published and np.mean(published) > 0 else
                    "; no published SAC return at this budget")
         lines.append(f"- {task}: {NAMES[kind]} {mean:.1f}, random actions {data['random']:.1f}{against}")
-        if task in held:
-            lines[-1] += (f". Holding the pole only where an episode starts near upright (a PD law within 45 degrees "
-                          f"of upright, no torque elsewhere: it never swings the pole up) earns {held[task]:.1f} on "
-                          f"the same episodes, and {_above(data, held[task])} ends above it; each seed's final return: "
+        if task in replays:
+            what = REPLAYED[task][0]
+            last, earlier = replays[task]
+            lines[-1] += (f". {what[0].upper()}{what[1:]} earns {last:.1f} on the same episodes ({earlier:.1f} on "
+                          f"the fifth of them the earlier rungs score), and {_above(data, last)} above it; each "
+                          "seed's final return: "
                           + "; ".join(_seeds_of(data, k) for k in data["per_seed"]))
     lines += ["", "Why each task ends where it does (and, where SOM-Q stops short, what was tried), from the tuning record (docs/benchmarks/dmc/TUNING.md: every setting tried on tuning seeds 100-103 "
               "with its return) and the yardsticks of scripts/dmc_yardsticks.py, which replay fixed controllers and, "
@@ -319,18 +344,15 @@ def _standing(m: dict, held: dict[str, float]) -> list[str]:
               "at 100,000 steps (TUNING.md).",
               "- pendulum-swingup: the dmc preset's torques (a sixth of the box) cannot lift the pendulum: the swing-up "
               "law (energy pumping, then a PD catch) rounded to them earns 0.0, against 833 over the whole box. Over "
-              "the whole box the number of cells is not what stops it: the law read at the centre of its cell on a "
-              "uniform 30x30 grid over angle and velocity still earns 744 (634.5 over the suite's episodes 0-29), "
-              "while the dmc_pendulum preset's 30x30 input map, learned by imitation on the law's own states and so "
-              "placed where they fall, holds 58.6 of it (its 3 nearest units blended, 223: one swing-up in five "
-              "episodes). Learning found no swing-up, in a map or in a fixed grid. The dmc_pendulum preset (the whole box, a 30x30 map, "
-              "30-step targets and advantage learning) learned to hold the pole at one tuning seed of four (196.7; "
-              "0.0, 0.0 and 2.1 at the others), and nine changes to it (TUNING.md: the 3 nearest units, a "
-              "500,000-step run without the step size's floor among them) did no better. The paper's alternative, "
-              "a fixed grid of 30 cells per observed dimension and 11 torques (somarm train dmc:pendulum-swingup "
-              "--learner tabular --set observation_bins=30 --set action_bins=11 --set gamma=0.995 --steps 400000), "
-              "earned 15.2, 14.4, 10.3 and 10.0 at tuning seeds 100-103 after 400,000 steps. The reward is sparse "
-              "(the top 30 degrees alone).",
+              "the whole box it is where the cells lie, not how many there are: the law read at the centre of its "
+              "cell on a uniform 30x30 grid over angle and velocity earns 744, but read at the nearest unit of a "
+              "30x30 map learned on the law's own states (the best case for such a map, its units where those "
+              "states fall) 70, and of a 50x50 map 230. SOM-Q's own 30x30 map, learning the law by imitation, holds "
+              "59 (its 3 nearest units blended 223). Learning found less: the dmc_pendulum preset (the whole box, "
+              "a 30x30 map, 30-step targets and advantage learning) held the pole at one tuning seed of four "
+              "(196.7; 0.0, 0.0 and 2.1 at the others), nine changes to it did no better, and the paper's "
+              "alternative, a fixed grid (the tabular learner), earned at most 15.2 (TUNING.md). The reward is "
+              "sparse (the top 30 degrees alone).",
               "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7). Maps scaled over "
               "the arena cannot hold it (one map over the four dimensions 0.5 by imitation, a map per axis 237): the "
               "target is 3 cm across in a 60 cm arena, and the law switches inside it. The dmc_point_mass preset's "
@@ -348,13 +370,14 @@ def _standing(m: dict, held: dict[str, float]) -> list[str]:
 
 @dataclass(frozen=True)
 class Trained:
-    """What the part trained (or found recorded): its seeds and episodes (after ``--quick``), each task's results."""
+    """What the part trained (or found recorded): its seeds and episodes (after ``--quick``), each task's results,
+    and each ``REPLAYED`` controller's return on its task's episodes (tasks with results only)."""
 
     seeds: dict[str, ReportSeeds]
     episodes: int
     recorded: bool
     results: dict[str, dict]
-    held: dict[str, float]
+    replays: dict[str, tuple[float, float]]
 
 
 def _trained(ctx: Context, *, recorded: bool) -> Trained:
@@ -362,7 +385,8 @@ def _trained(ctx: Context, *, recorded: bool) -> Trained:
     ``recorded`` only at the seeds already recorded in ``ctx.out_dir`` (none trained)."""
     seeds = ctx.pick(SEEDS, {task: each.first() for task, each in SEEDS.items()})
     episodes = ctx.pick(EPISODES, 3)
-    return Trained(seeds, episodes, recorded, train(ctx, seeds, episodes, TASKS, recorded=recorded), held(ctx, episodes))
+    results = train(ctx, seeds, episodes, TASKS, recorded=recorded)
+    return Trained(seeds, episodes, recorded, results, replayed(ctx, episodes, tuple(results)))
 
 
 def _reported(ctx: Context, trained: Trained, *, name: str) -> Section:
@@ -378,7 +402,7 @@ def _reported(ctx: Context, trained: Trained, *, name: str) -> Section:
         section.notes += ["", *trend]
     if missing := _missing(m, seeds, TASKS):
         section.notes += ["", *missing]
-    section.notes += ["", *_standing(m, trained.held), "", *_published(TASKS)]
+    section.notes += ["", *_standing(m, trained.replays), "", *_published(TASKS)]
     ours = ", ".join(f"{task} {fmt(budgets(ctx, task)[0])}" for task in TASKS)
     section.choices += [
         "SOM-Q and SOM-Q+ at seeds no setting was scored on before the task's preset was fixed (tuned on seeds "

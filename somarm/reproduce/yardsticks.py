@@ -1,4 +1,5 @@
-"""Hand-made controllers replayed on the benchmark environments: the yardsticks of the benchmarks part.
+"""Hand-made controllers replayed on the benchmark environments: the yardsticks of the benchmarks part (and the
+dmc part's hold on pendulum-swingup, ``pendulum_hold``).
 
 SOM-Q's greedy policy is a table: the winning input unit picks one of a fixed grid of torques. A
 controller known to work tells what that form costs, apart from learning. Replay it, then make it

@@ -130,21 +130,26 @@ def test_the_share_counts_as_reached_only_from_the_rung_it_is_held_to_the_end():
     assert benchmarks.reach(kept, 20.0, held=True) == (100, 10.0)
 
 
-def test_the_hold_is_scored_on_the_comparisons_own_episodes_and_the_report_counts_the_seeds_above_it():
-    ctx = Context(out_dir=None, seed=0, progress=False, quick=True)
-    held = dmc.held(ctx, 3)
-    assert list(held) == ["dmc:pendulum-swingup"] and 0.0 <= held["dmc:pendulum-swingup"] <= 1000.0
-    config = compare.CompareConfig(task="dmc:pendulum-swingup", learners=("somq",), seeds=1, seed=7, episodes=3,
-                                   eval_seed=0, task_params=dict(dmc.QUICK_PARAMS))
-    score = compare.make_plan(config).scorer()
-    from somarm.reproduce.yardsticks import pendulum_hold
-    assert score(lambda x: pendulum_hold(score.task.unscale(x))) == held["dmc:pendulum-swingup"]
+def test_the_hold_is_replayed_on_the_comparisons_own_episodes_and_the_report_counts_the_seeds_above_it(faked):
+    calls, _ = faked
+    ctx = Context(out_dir=faked[1].out_dir, seed=3, progress=False, quick=True)
+    dmc.train(ctx, dmc.SEEDS, 3, ("dmc:pendulum-swingup",))  # the configs the comparisons really run with
+    assert dmc.replayed(ctx, 3, ("dmc:cartpole-balance",)) == {}  # a task without a replayed controller
+    replays = dmc.replayed(ctx, 3, ("dmc:pendulum-swingup",))
+    score = compare.make_plan(calls[0]).scorer()
+    try:
+        from somarm.reproduce.yardsticks import pendulum_hold
+        def hold(x):
+            return pendulum_hold(score.task.unscale(x))
+        assert (score(hold), score(hold, last=False)) == replays["dmc:pendulum-swingup"]
+    finally:
+        score.task.close()
 
     data = {"final": {"somq": (1.0, 0.5), "somq+": (40.0, 1.0), "sac": (30.0, 1.0)},
             "per_seed": {"somq": [1.0, 1.5], "somq+": [0.5, 99.5], "sac": [98.8, 1.0]}, "random": 0.8}
-    line = next(x for x in dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": 99.1})
+    line = next(x for x in dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": (99.1, 329.0)})
                 if x.startswith("- dmc:pendulum-swingup"))
-    assert "earns 99.1 on the same episodes, and 1 seed of 6 ends above it" in line
-    assert "SB3 SAC 98.8, 1.0" in line
-    lines = dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": 100.0})
-    assert any("and no seed ends above it" in x for x in lines)
+    assert "earns 99.1 on the same episodes (329.0 on the fifth of them the earlier rungs score), and 1 seed of 6 ends above it" in line
+    assert "SB3 SAC 98.8, 1.0" in line and "Holding the pole only where" in line
+    assert any("and no seed ends above it" in x for x in dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": (100.0, 0.0)}))
+    assert any("and 2 seeds of 6 end above it" in x for x in dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": (50.0, 0.0)}))

@@ -114,11 +114,9 @@ def test_the_swing_up_law_on_a_uniform_30x30_grid_still_lifts_the_pendulum_and_a
     from somarm.tasks.dmc import SuiteEnv
 
     env = SuiteEnv("pendulum", "swingup")
-    law = laws["energy pumping and PD catch rounded to 11 torques over the box"]
-    assert laws["energy pumping and PD catch rounded to 11 torques over the box, on a 30x30 grid over angle and "
-                "velocity"] is not law
-    assert yardsticks._returns(env, yardsticks.on_grid(law, 30, 30), 1)[0] >= 600.0
-    assert yardsticks._returns(env, yardsticks.on_grid(law, 10, 10), 1)[0] < 600.0  # the bound can fail
+    on = "energy pumping and PD catch rounded to 11 torques over the box, on a {0}x{0} grid over angle and velocity"
+    assert yardsticks._returns(env, laws[on.format(30)], 1)[0] >= 600.0
+    assert yardsticks._returns(env, laws[on.format(10)], 1)[0] < 600.0  # the bound can fail
 
 
 def test_the_pendulum_hold_keeps_the_pole_up_from_near_upright_and_never_lifts_it_from_below():
