@@ -283,6 +283,55 @@ def _published(tasks: tuple[str, ...]) -> list[str]:
     return lines
 
 
+#: Why each task of the part ends where it does, from the tuning record and the yardsticks (the report's
+#: closing notes on the part).
+WHY = ["Why each task ends where it does (and, where SOM-Q stops short, what was tried), from the tuning record (docs/benchmarks/dmc/TUNING.md: every setting tried on tuning seeds 100-103 "
+       "with its return) and the yardsticks of scripts/dmc_yardsticks.py, which replay fixed controllers and, "
+       "with --through, each controller as SOM-Q's maps hold it when they learn it by imitation (what learning "
+       "could find at best in a representation):",
+       "",
+       "- cartpole-balance: the LQR law rounded to the preset's 11 forces balances for all 1,000 steps (999.8), "
+       "so the forces are not the limit; the map is. Through one map over every observed dimension the law "
+       "earns 388, below the 749 of a cart never pushed; through a 20x20 map over the pole alone, 685; "
+       "through a 30x30 pole map, 856. The dmc_balance preset learns on a 30x30 pole map, with local linear "
+       "units that follow the cart and 30-step targets (at 100 steps a second a push changes little in one "
+       "step), for 1,000,000 steps with a step size that falls to 0: 983, 932, 966 and 838 on the tuning "
+       "seeds; replayed at tuning seed 100, its greedy cart went at most 0.11-1.17 m from the middle in "
+       "five episodes and the pole never fell (scripts/dmc_cart_replay.py --seed 100 --samples 1000000). "
+       "Near upright the forces' values differ by less than the noise of their targets, so the "
+       "greedy force moves while the step size does: with the one-map preset's floor of 0.05 under it, the "
+       "same map reached 947 at 600,000 steps and fell to 721 by 1,000,000 (tuning seed 100). At 100,000 "
+       "steps a 20x20 pole map earned 700 on the tuning seeds: its greedy cart reached the end of its rail "
+       "(1.8 m) in each of five episodes, after 353-876 steps, and the pole fell 60-90 steps later "
+       "(scripts/dmc_cart_replay.py --seed 100 --set input_shape=20x20 --set alpha.floor=0.05). Settings "
+       "that let the cart choose the force (a second map over the cart, a local linear policy per unit, "
+       "gamma 0.998 or 0.999, a faster-falling step size, each force held for 4 steps) learned no better "
+       "at 100,000 steps (TUNING.md).",
+       "- pendulum-swingup: the dmc preset's torques (a sixth of the box) cannot lift the pendulum: the swing-up "
+       "law (energy pumping, then a PD catch) rounded to them earns 0.0, against 833 over the whole box. Over "
+       "the whole box it is where the cells lie, not how many there are: the law read at the centre of its "
+       "cell on a uniform 30x30 grid over angle and velocity earns 744, but read at the nearest unit of a "
+       "30x30 map learned on the law's own states (the best case for such a map, its units where those "
+       "states fall) 70, and of a 50x50 map 230. SOM-Q's own 30x30 map, learning the law by imitation, holds "
+       "59 (its 3 nearest units blended 223). Learning found less: the dmc_pendulum preset (the whole box, "
+       "a 30x30 map, 30-step targets and advantage learning) held the pole at one tuning seed of four "
+       "(196.7; 0.0, 0.0 and 2.1 at the others), nine changes to it did no better, and the paper's "
+       "alternative, a fixed grid (the tabular learner), earned at most 15.2 (TUNING.md). The reward is "
+       "sparse (the top 30 degrees alone).",
+       "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7). Maps scaled over "
+       "the arena cannot hold it (one map over the four dimensions 0.5 by imitation, a map per axis 237): the "
+       "target is 3 cm across in a 60 cm arena, and the law switches inside it. The dmc_point_mass preset's "
+       "maps, one per axis with the positions scaled from +-3 cm, hold 903.6; learning in them with 30-step "
+       "targets (the reward is the target alone) earned 393 and 452 on the tuning seeds at 100,000 steps, "
+       "against 6.4 and 2.8 for dmc_2d. Its greedy mass then reached the target after up to 400 steps (the "
+       "PD law's take about 100) or stopped short of it: far from the target every state falls on the "
+       "maps' edge units, whose forces' values differ by little. Advantage learning (action_gap 0.5), "
+       "which widens them, earned 806, 785, 828 and 604 on tuning seeds 100-103 at 300,000 steps and 855, "
+       "834, 841 and 725 at 600,000, the preset's run length (the interpolated response, SOM-Q+; it was "
+       "still learning at both).",
+       "- reacher-easy, reacher-hard and cartpole-swingup: no setting beyond the presets was tried on them."]
+
+
 def _above(data: dict, bound: float) -> str:
     """How many of every learner's seeds end above ``bound``, as a clause: "no seed ends", "1 seed of N ends",
     "K seeds of N end"."""
@@ -320,51 +369,7 @@ def _standing(m: dict, replays: dict[str, tuple[float, float]]) -> list[str]:
                           f"the fifth of them the earlier rungs score), and {_above(data, last)} above it; each "
                           "seed's final return: "
                           + "; ".join(_seeds_of(data, k) for k in data["per_seed"]))
-    lines += ["", "Why each task ends where it does (and, where SOM-Q stops short, what was tried), from the tuning record (docs/benchmarks/dmc/TUNING.md: every setting tried on tuning seeds 100-103 "
-              "with its return) and the yardsticks of scripts/dmc_yardsticks.py, which replay fixed controllers and, "
-              "with --through, each controller as SOM-Q's maps hold it when they learn it by imitation (what learning "
-              "could find at best in a representation):",
-              "",
-              "- cartpole-balance: the LQR law rounded to the preset's 11 forces balances for all 1,000 steps (999.8), "
-              "so the forces are not the limit; the map is. Through one map over every observed dimension the law "
-              "earns 388, below the 749 of a cart never pushed; through a 20x20 map over the pole alone, 685; "
-              "through a 30x30 pole map, 856. The dmc_balance preset learns on a 30x30 pole map, with local linear "
-              "units that follow the cart and 30-step targets (at 100 steps a second a push changes little in one "
-              "step), for 1,000,000 steps with a step size that falls to 0: 983, 932, 966 and 838 on the tuning "
-              "seeds; replayed at tuning seed 100, its greedy cart went at most 0.11-1.17 m from the middle in "
-              "five episodes and the pole never fell (scripts/dmc_cart_replay.py --seed 100 --samples 1000000). "
-              "Near upright the forces' values differ by less than the noise of their targets, so the "
-              "greedy force moves while the step size does: with the one-map preset's floor of 0.05 under it, the "
-              "same map reached 947 at 600,000 steps and fell to 721 by 1,000,000 (tuning seed 100). At 100,000 "
-              "steps a 20x20 pole map earned 700 on the tuning seeds: its greedy cart reached the end of its rail "
-              "(1.8 m) in each of five episodes, after 353-876 steps, and the pole fell 60-90 steps later "
-              "(scripts/dmc_cart_replay.py --seed 100 --set input_shape=20x20 --set alpha.floor=0.05). Settings "
-              "that let the cart choose the force (a second map over the cart, a local linear policy per unit, "
-              "gamma 0.998 or 0.999, a faster-falling step size, each force held for 4 steps) learned no better "
-              "at 100,000 steps (TUNING.md).",
-              "- pendulum-swingup: the dmc preset's torques (a sixth of the box) cannot lift the pendulum: the swing-up "
-              "law (energy pumping, then a PD catch) rounded to them earns 0.0, against 833 over the whole box. Over "
-              "the whole box it is where the cells lie, not how many there are: the law read at the centre of its "
-              "cell on a uniform 30x30 grid over angle and velocity earns 744, but read at the nearest unit of a "
-              "30x30 map learned on the law's own states (the best case for such a map, its units where those "
-              "states fall) 70, and of a 50x50 map 230. SOM-Q's own 30x30 map, learning the law by imitation, holds "
-              "59 (its 3 nearest units blended 223). Learning found less: the dmc_pendulum preset (the whole box, "
-              "a 30x30 map, 30-step targets and advantage learning) held the pole at one tuning seed of four "
-              "(196.7; 0.0, 0.0 and 2.1 at the others), nine changes to it did no better, and the paper's "
-              "alternative, a fixed grid (the tabular learner), earned at most 15.2 (TUNING.md). The reward is "
-              "sparse (the top 30 degrees alone).",
-              "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7). Maps scaled over "
-              "the arena cannot hold it (one map over the four dimensions 0.5 by imitation, a map per axis 237): the "
-              "target is 3 cm across in a 60 cm arena, and the law switches inside it. The dmc_point_mass preset's "
-              "maps, one per axis with the positions scaled from +-3 cm, hold 903.6; learning in them with 30-step "
-              "targets (the reward is the target alone) earned 393 and 452 on the tuning seeds at 100,000 steps, "
-              "against 6.4 and 2.8 for dmc_2d. Its greedy mass then reached the target after up to 400 steps (the "
-              "PD law's take about 100) or stopped short of it: far from the target every state falls on the "
-              "maps' edge units, whose forces' values differ by little. Advantage learning (action_gap 0.5), "
-              "which widens them, earned 806, 785, 828 and 604 on tuning seeds 100-103 at 300,000 steps and 855, "
-              "834, 841 and 725 at 600,000, the preset's run length (the interpolated response, SOM-Q+; it was "
-              "still learning at both).",
-              "- reacher-easy, reacher-hard and cartpole-swingup: no setting beyond the presets was tried on them."]
+    lines += ["", *WHY]
     return lines
 
 
