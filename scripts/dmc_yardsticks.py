@@ -11,6 +11,9 @@ dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episode
   the latter read at the centre of each state's cell of a uniform 30x30 or 10x10 grid over angle and
   velocity (``on_grid``: cells evenly spread); the catch alone, no torque farther than 45 degrees from
   upright (``pendulum_hold``: what a policy earns that holds the pole only where an episode starts near it).
+- cartpole-swingup: energy pumping with no catch (``pump``: the largest force, pushed against the pole's
+  swing, ``u = -F sign(theta' cos theta)``), at the ``dmc`` preset's largest force (a sixth of the box) and
+  at the box's: whether the preset's forces can bring the pole up at all.
 - point_mass-easy: the PD law ``u = clip(-50 x - 10 v)`` and the same rounded to the 3x3 grid of
   ``dmc_2d`` (-1, 0, 1 per axis).
 
@@ -41,6 +44,8 @@ import scipy.linalg
 from somarm.reproduce.yardsticks import pendulum_hold
 from somarm.tasks.dmc import SuiteEnv, split_name
 
+#: The tasks with fixed controllers (``controllers``).
+TASKS = ("dmc:cartpole-balance", "dmc:cartpole-swingup", "dmc:pendulum-swingup", "dmc:point_mass-easy")
 #: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
 BOUNDS = {
     "dmc:cartpole-balance": ([-1.5, -1.0, -0.25, -1.5, -2.0], [1.5, 1.0, 0.25, 1.5, 2.0]),
@@ -144,6 +149,14 @@ def on_grid(law, angles: int, speeds: int, top_speed: float = 10.0):
     return held
 
 
+def pump(force: float):
+    """Energy pumping for the suite's cartpole, with no catch: ``force`` pushed against the pole's swing."""
+    def law(o: np.ndarray) -> np.ndarray:
+        _, cos, _, _, thetadot = o
+        return np.array([-force * np.sign(thetadot * cos) if abs(thetadot) > 1e-3 else force])
+    return law
+
+
 def controllers() -> dict[str, list[tuple[str, object]]]:
     """Per task: (what, policy) of every fixed controller, the first of each the one ``--through`` holds."""
     sixth, whole = np.linspace(-1 / 6, 1 / 6, 11), np.linspace(-1.0, 1.0, 11)
@@ -164,6 +177,9 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
             ("LQR rounded to the dmc preset's 11 forces (a sixth of the box)", lambda o: _rounded(lqr(o), sixth)),
             ("no force", lambda o: 0.0), ("LQR", lqr),
             ("LQR rounded to 11 forces over the box", lambda o: _rounded(lqr(o), whole))],
+        "dmc:cartpole-swingup": [
+            ("energy pumping at the dmc preset's largest force (a sixth of the box), no catch", pump(1 / 6)),
+            ("energy pumping at the box's largest force, no catch", pump(1.0)), ("no force", lambda o: 0.0)],
         "dmc:pendulum-swingup": [
             ("energy pumping and PD catch rounded to 11 torques over the box", lambda o: _rounded(swing(o), whole)),
             ("energy pumping and PD catch", swing),
@@ -223,16 +239,18 @@ def main() -> None:
     parser.add_argument("--through", action="store_true", help="each controller as SOM-Q's maps hold it")
     parser.add_argument("--seed", type=int, default=100, help="with --through: a tuning seed (100-199)")
     parser.add_argument("--states", type=int, default=50_000, help="with --through: the controller's states learned")
-    parser.add_argument("--task", choices=list(BOUNDS), default=None, help="one task's rows (default: every task's)")
+    parser.add_argument("--task", choices=TASKS, default=None, help="one task's rows (default: every task's)")
     args = parser.parse_args()
     if args.through and not 100 <= args.seed <= 199:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
+    if args.through and args.task not in (None, *THROUGH):
+        raise SystemExit(f"--through takes {', '.join(THROUGH)}, not {args.task}")
     rows = []
     for task, laws in controllers().items():
         if args.task not in (None, task):
             continue
         if args.through:
-            rows += _through(task, laws[0][1], args)
+            rows += _through(task, laws[0][1], args) if task in THROUGH else []
             continue
         env = SuiteEnv(*split_name(task))
         rows += [{"task": task, "controller": what, "returns": _returns(env, law, args.episodes)} for what, law in laws]

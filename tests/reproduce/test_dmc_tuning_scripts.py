@@ -140,3 +140,17 @@ def test_the_pendulum_hold_keeps_the_pole_up_from_near_upright_and_never_lifts_i
     assert totals[0.1] >= 990.0
     assert totals[np.pi - 0.1] == 0.0
     assert pendulum_hold(np.array([[np.cos(1.0), np.sin(1.0), 0.0]]))[0, 0] == 0.0  # 57 degrees out: no torque
+
+
+def test_energy_pumping_at_the_dmc_presets_largest_force_brings_the_cartpoles_pole_upright():
+    yardsticks = _script("dmc_yardsticks")
+    laws = dict(yardsticks.controllers()["dmc:cartpole-swingup"])
+    from somarm.tasks.dmc import SuiteEnv
+
+    env = SuiteEnv("cartpole", "swingup")
+    tops = []
+    sixth = laws["energy pumping at the dmc preset's largest force (a sixth of the box), no catch"]
+    pumped = yardsticks._returns(env, sixth, 1, watch=lambda episode, e, a: tops.append(float(e.physics.named.data.qpos["hinge_1"][0])))
+    assert max(np.cos(tops)) > 0.99  # the pole passes upright
+    assert pumped[0] >= 150.0
+    assert yardsticks._returns(env, laws["no force"], 1)[0] < 150.0  # hanging still does not: the bound can fail
