@@ -44,8 +44,6 @@ import scipy.linalg
 from somarm.reproduce.yardsticks import pendulum_hold
 from somarm.tasks.dmc import SuiteEnv, split_name
 
-#: The tasks with fixed controllers (``controllers``).
-TASKS = ("dmc:cartpole-balance", "dmc:cartpole-swingup", "dmc:pendulum-swingup", "dmc:point_mass-easy")
 #: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
 BOUNDS = {
     "dmc:cartpole-balance": ([-1.5, -1.0, -0.25, -1.5, -2.0], [1.5, 1.0, 0.25, 1.5, 2.0]),
@@ -172,14 +170,15 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
     swing = _swing_up(pendulum)
     pendulum.close()
     pd = lambda o: np.clip(-50.0 * o[:2] - 10.0 * o[2:], -1.0, 1.0)  # noqa: E731
+    still = lambda o: 0.0  # noqa: E731
     return {
         "dmc:cartpole-balance": [
             ("LQR rounded to the dmc preset's 11 forces (a sixth of the box)", lambda o: _rounded(lqr(o), sixth)),
-            ("no force", lambda o: 0.0), ("LQR", lqr),
+            ("no force", still), ("LQR", lqr),
             ("LQR rounded to 11 forces over the box", lambda o: _rounded(lqr(o), whole))],
         "dmc:cartpole-swingup": [
             ("energy pumping at the dmc preset's largest force (a sixth of the box), no catch", pump(1 / 6)),
-            ("energy pumping at the box's largest force, no catch", pump(1.0)), ("no force", lambda o: 0.0)],
+            ("energy pumping at the box's largest force, no catch", pump(1.0)), ("no force", still)],
         "dmc:pendulum-swingup": [
             ("energy pumping and PD catch rounded to 11 torques over the box", lambda o: _rounded(swing(o), whole)),
             ("energy pumping and PD catch", swing),
@@ -239,18 +238,20 @@ def main() -> None:
     parser.add_argument("--through", action="store_true", help="each controller as SOM-Q's maps hold it")
     parser.add_argument("--seed", type=int, default=100, help="with --through: a tuning seed (100-199)")
     parser.add_argument("--states", type=int, default=50_000, help="with --through: the controller's states learned")
-    parser.add_argument("--task", choices=TASKS, default=None, help="one task's rows (default: every task's)")
+    every = controllers()
+    parser.add_argument("--task", choices=list(every), default=None, help="one task's rows (default: every task's)")
     args = parser.parse_args()
     if args.through and not 100 <= args.seed <= 199:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     if args.through and args.task not in (None, *THROUGH):
         raise SystemExit(f"--through takes {', '.join(THROUGH)}, not {args.task}")
     rows = []
-    for task, laws in controllers().items():
+    for task in THROUGH if args.through else every:
+        laws = every[task]
         if args.task not in (None, task):
             continue
         if args.through:
-            rows += _through(task, laws[0][1], args) if task in THROUGH else []
+            rows += _through(task, laws[0][1], args)
             continue
         env = SuiteEnv(*split_name(task))
         rows += [{"task": task, "controller": what, "returns": _returns(env, law, args.episodes)} for what, law in laws]
