@@ -1,11 +1,13 @@
-"""Where a learned greedy cart goes on dmc:cartpole-balance: train the task's preset (or ``--preset``,
-changed by ``--set KEY=VALUE``) for ``--samples`` steps at a tuning seed, then replay its greedy policy
-(the interpolated response, SOM-Q+) over the suite's episodes 0 to ``--episodes`` - 1 and print, per
-episode, the return, how far the cart went, the first step it came within 5 cm of the end of its rail,
-the first step the pole fell below horizontal, and the mean absolute force. One JSON line per episode.
-Used by docs/benchmarks/dmc/TUNING.md.
+"""Where a learned greedy cart goes on dmc:cartpole-balance (or ``--task dmc:cartpole-swingup``): train the
+task's preset (or ``--preset``, changed by ``--set KEY=VALUE``) for ``--samples`` steps at a tuning seed,
+then replay its greedy policy (the interpolated response, SOM-Q+) over the suite's episodes 0 to
+``--episodes`` - 1 and print, per episode, the return, how far the cart went, the first step it came
+within 5 cm of the end of its rail, the first step the pole fell below horizontal, the highest the pole
+rose (the largest cosine of its angle from upright) and the steps it spent within 30 degrees of upright,
+and the mean absolute force. One JSON line per episode. Used by docs/benchmarks/dmc/TUNING.md.
 
     python scripts/dmc_cart_replay.py --seed 100 --samples 100000 --set input_shape=20x20 --set alpha.floor=0.05
+    python scripts/dmc_cart_replay.py --task dmc:cartpole-swingup --seed 100
 
 (that is ``dmc_balance`` as it was before it took a 30x30 map and a step size falling to 0).
 """
@@ -21,13 +23,14 @@ import numpy as np
 
 from somarm import tasks
 from somarm.learners import presets
-from somarm.tasks.dmc import SuiteEnv
+from somarm.tasks.dmc import SuiteEnv, split_name
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from dmc_yardsticks import _returns  # noqa: E402  (how the yardsticks play a suite episode)
 from tune_benchmark import _train, learner_for  # noqa: E402  (how the tuning scripts train)
 
-TASK = "dmc:cartpole-balance"
+#: The cartpole tasks replayed.
+TASKS = ("dmc:cartpole-balance", "dmc:cartpole-swingup")
 
 
 def _first(mask: np.ndarray) -> int | None:
@@ -35,9 +38,10 @@ def _first(mask: np.ndarray) -> int | None:
 
 
 def replay(env: SuiteEnv, policy, episodes: int) -> list[dict]:
-    """``policy`` (observation -> action) on cartpole-balance ``env`` over its episodes 0 to ``episodes`` - 1:
-    per episode the return, the rail's end, how far the cart went, the first step it came within 5 cm of
-    the rail's end, the first step the pole fell below horizontal, and the mean absolute force."""
+    """``policy`` (observation -> action) on cartpole ``env`` over its episodes 0 to ``episodes`` - 1: per
+    episode the return, the rail's end, how far the cart went, the first step it came within 5 cm of the
+    rail's end, the first step the pole fell below horizontal, the pole's largest cosine from upright and
+    its steps within 30 degrees of upright, and the mean absolute force."""
     rail = float(env.physics.named.model.jnt_range["slider"][1])
     seen = [([], [], []) for _ in range(episodes)]
 
@@ -52,12 +56,14 @@ def replay(env: SuiteEnv, policy, episodes: int) -> list[dict]:
         carts, cosines = np.asarray(seen[episode][0]), np.asarray(seen[episode][1])
         rows.append({"episode": episode, "return": total, "rail_m": rail,
                      "cart_max_m": round(float(carts.max()), 3), "cart_at_rail_step": _first(carts > rail - 0.05),
-                     "pole_fell_step": _first(cosines < 0), "mean_abs_force": round(float(np.mean(seen[episode][2])), 3)})
+                     "pole_fell_step": _first(cosines < 0), "pole_top_cos": round(float(cosines.max()), 3),
+                     "steps_upright": int((cosines > np.cos(np.pi / 6)).sum()), "mean_abs_force": round(float(np.mean(seen[episode][2])), 3)})
     return rows
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--task", choices=TASKS, default=TASKS[0])
     parser.add_argument("--seed", type=int, default=100, help="a tuning seed (100-199)")
     parser.add_argument("--samples", type=int, default=100_000)
     parser.add_argument("--episodes", type=int, default=5)
@@ -66,16 +72,16 @@ def main() -> None:
     args = parser.parse_args()
     if not 100 <= args.seed <= 199:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
-    preset = args.preset or tasks.record(TASK).preset
+    preset = args.preset or tasks.record(args.task).preset
     settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in args.set))
-    params = tasks.record(TASK).complete(tasks.check_params(TASK, presets.task_params_of(preset, TASK)), args.seed)
-    task = tasks.make(TASK, seed=args.seed, **params)
+    params = tasks.record(args.task).complete(tasks.check_params(args.task, presets.task_params_of(preset, args.task)), args.seed)
+    task = tasks.make(args.task, seed=args.seed, **params)
     learner = learner_for(task, settings, args.seed)
     _train(task, learner, args.samples)
-    env = SuiteEnv("cartpole", "balance")
+    env = SuiteEnv(*split_name(args.task))
     policy = lambda o: np.asarray(learner.predict(task.scale(o)[None])[0]).reshape(-1)  # noqa: E731
     for row in replay(env, policy, args.episodes):
-        print(json.dumps({"seed": args.seed, "preset": preset, "settings": args.set, "samples": args.samples, **row}),
+        print(json.dumps({"task": args.task, "seed": args.seed, "preset": preset, "settings": args.set, "samples": args.samples, **row}),
               flush=True)
     env.close()
     task.close()

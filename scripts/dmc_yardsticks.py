@@ -16,6 +16,10 @@ dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episode
   at the box's: whether the preset's forces can bring the pole up at all.
 - point_mass-easy: the PD law ``u = clip(-50 x - 10 v)`` and the same rounded to the 3x3 grid of
   ``dmc_2d`` (-1, 0, 1 per axis).
+- reacher-easy and reacher-hard: a joint-space PD law on the arm's inverse kinematics (``reach``: the target
+  is the finger plus ``to_target``, the joint angles that put the finger there are solved for the elbow
+  nearer the arm's own, ``u = clip(10 (q* - q) - q')``, the link lengths read from the model), as it is and
+  rounded to the 3x3 grid of ``dmc_2d`` (-1, 0, 1 per joint).
 
 ``--through``: each controller (rounded to a grid SOM-Q can answer with) as SOM-Q holds it when it
 learns it by imitation (``somarm.reproduce.yardsticks.through_representation``: gamma 0, one random
@@ -47,8 +51,11 @@ from somarm.tasks.dmc import SuiteEnv, split_name
 #: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
 BOUNDS = {
     "dmc:cartpole-balance": ([-1.5, -1.0, -0.25, -1.5, -2.0], [1.5, 1.0, 0.25, 1.5, 2.0]),
+    "dmc:cartpole-swingup": ([-1.8, -1.0, -1.0, -1.5, -10.0], [1.8, 1.0, 1.0, 1.5, 10.0]),
     "dmc:pendulum-swingup": ([-1.0, -1.0, -10.0], [1.0, 1.0, 10.0]),
     "dmc:point_mass-easy": ([-0.03, -0.03, -0.1, -0.1], [0.03, 0.03, 0.1, 0.1]),
+    **{f"dmc:reacher-{level}": ([-3.5, -2.8, -0.45, -0.45, -5.0, -5.0], [3.5, 2.8, 0.45, 0.45, 5.0, 5.0])
+       for level in ("easy", "hard")},
 }
 #: point_mass-easy's maps over the whole arena instead (a row of ``THROUGH`` may name other bounds).
 ARENA = ([-0.3, -0.3, -0.1, -0.1], [0.3, 0.3, 0.1, 0.1])
@@ -60,6 +67,8 @@ THROUGH = {
         "local_linear=false shared_slopes=false", "input_groups=2,3,4 local_linear=false shared_slopes=false",
         "input_shape=30x30 local_linear=false shared_slopes=false", "", "shared_slopes=false",
         "input_shape=10x10 action_slopes=true"]),
+    "dmc:cartpole-swingup": (0.05, [
+        "", "input_shape=30x30", "k_nearest=3", "input_groups=1,2,4", "input_groups=1,4"]),
     "dmc:pendulum-swingup": (0.3, [
         "grid_span=1", "grid_span=1 input_shape=30x30", "grid_span=1 k_nearest=3",
         "local_linear=true shared_slopes=true", "local_linear=true shared_slopes=true action_slopes=true",
@@ -67,10 +76,15 @@ THROUGH = {
         ("", ([-1.0, -1.0, -4.0], [1.0, 1.0, 4.0])), ("", ([0.5, -1.0, -5.0], [1.0, 1.0, 5.0])),
         ("", ([0.8, -0.6, -4.0], [1.0, 0.6, 4.0]))]),
     "dmc:point_mass-easy": (0.3, [("input_groups=all", ARENA), ("", ARENA), "", "k_nearest=3"]),
+    **{f"dmc:reacher-{level}": (0.3, [
+        "", "input_shape=30x30", "k_nearest=3", "input_groups=0,1,2,3", "input_groups=0,1;2,3",
+        "input_groups=pairs input_shape=10x10 k_nearest=3 local_linear=true shared_slopes=true"])
+       for level in ("easy", "hard")},
 }
 
 #: The map shapes the controller is read through at its nearest unit, per task (with ``--through``).
-AT_UNITS = {"dmc:pendulum-swingup": [(30, 30), (50, 50)]}
+AT_UNITS = {"dmc:pendulum-swingup": [(30, 30), (50, 50)],
+            **{f"dmc:reacher-{level}": [(20, 20), (50, 50)] for level in ("easy", "hard")}}
 
 
 def _returns(env: SuiteEnv, policy, episodes: int, watch=None) -> list[float]:
@@ -155,6 +169,28 @@ def pump(force: float):
     return law
 
 
+def reach(env: SuiteEnv, gain: float = 10.0, damping: float = 1.0):
+    """A joint-space PD law on the suite reacher's inverse kinematics: the finger sent to the target (the
+    finger plus ``to_target``) through the joint angles that put it there, the elbow nearer the arm's own."""
+    model = env.physics.model
+    upper = float(np.linalg.norm(model.body("hand").pos[:2]))  # shoulder to wrist
+    lower = float(np.linalg.norm(model.body("finger").pos[:2]))  # wrist to finger
+
+    def law(o: np.ndarray) -> np.ndarray:
+        shoulder, wrist, dx, dy = o[:4]
+        x = upper * np.cos(shoulder) + lower * np.cos(shoulder + wrist) + dx
+        y = upper * np.sin(shoulder) + lower * np.sin(shoulder + wrist) + dy
+        bend = np.arccos(np.clip((x * x + y * y - upper ** 2 - lower ** 2) / (2 * upper * lower), -1.0, 1.0))
+        errors = []
+        for elbow in (bend, -bend):
+            base = np.arctan2(y, x) - np.arctan2(lower * np.sin(elbow), upper + lower * np.cos(elbow))
+            errors.append(np.array([(base - shoulder + np.pi) % (2 * np.pi) - np.pi, elbow - wrist]))
+        error = min(errors, key=lambda e: float(np.abs(e).sum()))
+        return np.clip(gain * error - damping * o[4:6], -1.0, 1.0)
+
+    return law
+
+
 def controllers() -> dict[str, list[tuple[str, object]]]:
     """Per task: (what, policy) of every fixed controller, the first of each the one ``--through`` holds."""
     sixth, whole = np.linspace(-1 / 6, 1 / 6, 11), np.linspace(-1.0, 1.0, 11)
@@ -169,6 +205,9 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
     pendulum = SuiteEnv("pendulum", "swingup")
     swing = _swing_up(pendulum)
     pendulum.close()
+    arm = SuiteEnv("reacher", "easy")
+    ik = reach(arm)
+    arm.close()
     pd = lambda o: np.clip(-50.0 * o[:2] - 10.0 * o[2:], -1.0, 1.0)  # noqa: E731
     still = lambda o: 0.0  # noqa: E731
     return {
@@ -191,6 +230,10 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
              lambda o: pendulum_hold(o[None])[0])],
         "dmc:point_mass-easy": [
             ("PD rounded to the dmc_2d preset's 3x3 grid", lambda o: np.round(pd(o))), ("PD", pd)],
+        **{f"dmc:reacher-{level}": [
+            ("joint-space PD on the inverse kinematics rounded to the dmc_2d preset's 3x3 grid",
+             lambda o: np.round(ik(o))),
+            ("joint-space PD on the inverse kinematics", ik), ("no force", still)] for level in ("easy", "hard")},
     }
 
 

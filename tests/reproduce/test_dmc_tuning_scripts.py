@@ -106,6 +106,19 @@ def test_the_cart_replay_finds_the_rail_before_the_fall_under_a_constant_push_an
 
     held, = replay(env, lqr, 1)
     assert held["cart_at_rail_step"] is None and held["pole_fell_step"] is None and held["return"] > 990.0
+    assert held["steps_upright"] == 1000 and held["pole_top_cos"] > 0.99
+
+
+def test_the_cart_replay_sees_the_swing_up_pole_rise_under_pumping_and_stay_down_at_rest():
+    replay = _script("dmc_cart_replay").replay
+    pump = _script("dmc_yardsticks").pump
+    from somarm.tasks.dmc import SuiteEnv
+
+    env = SuiteEnv("cartpole", "swingup")
+    still, = replay(env, lambda o: 0.0, 1)
+    assert still["pole_top_cos"] < -0.9 and still["steps_upright"] == 0
+    pumped, = replay(env, pump(1 / 6), 1)
+    assert pumped["pole_top_cos"] > 0.99 and pumped["steps_upright"] > 0
 
 
 def test_the_swing_up_law_on_a_uniform_30x30_grid_still_lifts_the_pendulum_and_a_coarse_grid_does_not():
@@ -154,3 +167,18 @@ def test_energy_pumping_at_the_dmc_presets_largest_force_brings_the_cartpoles_po
     assert max(np.cos(tops)) > 0.99  # the pole passes upright
     assert pumped[0] >= 150.0
     assert yardsticks._returns(env, laws["no force"], 1)[0] < 150.0  # hanging still does not: the bound can fail
+
+
+def test_the_reach_law_on_the_dmc_2d_grid_puts_the_finger_on_the_hard_target_and_pushing_nothing_does_not():
+    yardsticks = _script("dmc_yardsticks")
+    laws = dict(yardsticks.controllers()["dmc:reacher-hard"])
+    from somarm.tasks.dmc import SuiteEnv
+
+    env = SuiteEnv("reacher", "hard")
+    gaps = []
+    rounded = laws["joint-space PD on the inverse kinematics rounded to the dmc_2d preset's 3x3 grid"]
+    assert set(np.unique(np.concatenate([rounded(env.reset(seed=k)[0]) for k in range(5)]))) <= {-1.0, 0.0, 1.0}
+    reached = yardsticks._returns(env, rounded, 1, watch=lambda episode, e, a: gaps.append(e.physics.finger_to_target_dist()))
+    assert gaps[-1] < 0.025  # the finger ends on the target (its radius and the finger's)
+    assert reached[0] >= 900.0
+    assert yardsticks._returns(env, laws["no force"], 1)[0] < 100.0  # an arm left alone does not: the bound can fail
