@@ -210,7 +210,7 @@ def _benchmarks() -> tuple[Preset, ...]:
         "k_nearest": 3, "local_linear": True, "shared_slopes": True, "n_a": Schedule(2.0), "n_step": 3}, _REACHER_SCALING)
     # The DeepMind Control Suite's report tasks (``tasks.gym_envs``' DMC_BENCHMARKS).
     dmc = Preset(
-        "dmc", "beyond the paper: the DeepMind Control Suite's swing-ups (dmc:cartpole-swingup, dmc:pendulum-swingup)",
+        "dmc", "beyond the paper: the DeepMind Control Suite's one-force tasks (the recipe of dmc_cartpole, dmc_pendulum)",
         dataclasses.replace(invertedpendulum.config, input_groups="all"),
         "dmc:cartpole-swingup", "none (the report's dmc part)", 5, None)
     balance = Preset(
@@ -231,7 +231,11 @@ def _benchmarks() -> tuple[Preset, ...]:
         "dmc_pendulum", "beyond the paper: the DeepMind Control Suite's dmc:pendulum-swingup",
         dataclasses.replace(dmc.config, input_shape=(30, 30), grid_span=1.0, n_step=30, action_gap=0.5),
         "dmc:pendulum-swingup", "none (the report's dmc part)", 5, None, task_params=_PENDULUM_SCALING)
-    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d, point_mass, swingup
+    cartpole = Preset(
+        "dmc_cartpole", "beyond the paper: the DeepMind Control Suite's dmc:cartpole-swingup",
+        dataclasses.replace(dmc.config, q_init=0.0, n_step=30, grid_span=1.0),
+        "dmc:cartpole-swingup", "none (the report's dmc part)", 5, None)
+    return generic, pendulum, mountaincar, invertedpendulum, reacher, dmc, balance, dmc_2d, point_mass, swingup, cartpole
 
 
 def _with_choices(presets: tuple[Preset, ...]) -> dict[str, Preset]:

@@ -98,7 +98,7 @@ _DEFAULT_STEPS = 100_000
 #: ``dmc:`` task trains with the generic ``gym`` preset for ``_DEFAULT_STEPS`` steps.
 DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
     "dmc:cartpole-balance": ("dmc_balance", 1_000_000),
-    "dmc:cartpole-swingup": ("dmc", 100_000),
+    "dmc:cartpole-swingup": ("dmc_cartpole", 300_000),
     "dmc:pendulum-swingup": ("dmc_pendulum", 100_000),
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard")},
     "dmc:point_mass-easy": ("dmc_point_mass", 600_000),

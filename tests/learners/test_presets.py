@@ -11,7 +11,7 @@ from somarm.learners.somq import SOMQConfig
 
 NAMES = ["table1", "table2", "table4", "table5", "table7", "table7a", "table1+", "table2+", "table5+"]
 BENCHMARKS = ["gym", "pendulum", "mountaincar", "invertedpendulum", "reacher"]
-SUITE = ["dmc", "dmc_balance", "dmc_2d", "dmc_point_mass", "dmc_pendulum"]
+SUITE = ["dmc", "dmc_balance", "dmc_2d", "dmc_point_mass", "dmc_pendulum", "dmc_cartpole"]
 
 
 def test_every_table_is_available_by_name_with_a_description():
@@ -199,7 +199,14 @@ def test_the_pendulum_preset_spans_the_circle_and_the_whole_torque_box_with_n_st
     ranges = presets.task_params_of("dmc_pendulum", "dmc:pendulum-swingup")["observation_ranges"]
     assert ranges == {"0": [-1.0, 1.0], "1": [-1.0, 1.0], "2": [-10.0, 10.0]}
     assert tasks.record("dmc:pendulum-swingup").preset == "dmc_pendulum"
-    assert tasks.record("dmc:cartpole-swingup").preset == "dmc"
+
+
+def test_the_cartpole_swing_up_preset_starts_q_at_zero_with_n_step_targets_over_the_whole_force_box():
+    base, swing = presets.get("dmc").to_dict(), presets.get("dmc_cartpole").to_dict()
+    assert {key for key in base if base[key] != swing[key]} == {"q_init", "n_step", "grid_span"}
+    assert (swing["q_init"], swing["n_step"], swing["grid_span"], base["q_init"]) == (0.0, 30, 1.0, 200.0)
+    assert tasks.record("dmc:cartpole-swingup").preset == "dmc_cartpole"
+    assert tasks.record("dmc:cartpole-swingup").n_steps == 300_000
 
 
 
