@@ -155,30 +155,38 @@ def test_the_pendulum_hold_keeps_the_pole_up_from_near_upright_and_never_lifts_i
     assert pendulum_hold(np.array([[np.cos(1.0), np.sin(1.0), 0.0]]))[0, 0] == 0.0  # 57 degrees out: no torque
 
 
-def test_energy_pumping_at_the_dmc_presets_largest_force_brings_the_cartpoles_pole_upright():
+def _watched(task: str, what: str, probe):
+    """The yardstick ``what`` of suite ``task`` on reset seed 0, with ``probe(env)`` after each of its steps;
+    and pushing nothing on the same episode: (its return, the probes, the return at rest, the law)."""
     yardsticks = _script("dmc_yardsticks")
-    laws = dict(yardsticks.controllers()["dmc:cartpole-swingup"])
-    from somarm.tasks.dmc import SuiteEnv
+    laws = dict(yardsticks.controllers()[task])
+    from somarm.tasks.dmc import SuiteEnv, split_name
 
-    env = SuiteEnv("cartpole", "swingup")
-    tops = []
-    sixth = laws["energy pumping at the dmc preset's largest force (a sixth of the box), no catch"]
-    pumped = yardsticks._returns(env, sixth, 1, watch=lambda episode, e, a: tops.append(float(e.physics.named.data.qpos["hinge_1"][0])))
+    env, seen = SuiteEnv(*split_name(task)), []
+    total = yardsticks._returns(env, laws[what], 1, watch=lambda episode, e, a: seen.append(probe(e)))[0]
+    still = yardsticks._returns(env, laws["no force"], 1)[0]
+    env.close()
+    return total, seen, still, laws[what]
+
+
+def test_energy_pumping_at_the_dmc_presets_largest_force_brings_the_cartpoles_pole_upright():
+    pumped, tops, still, _ = _watched("dmc:cartpole-swingup",
+                                      "energy pumping at the dmc preset's largest force (a sixth of the box), no catch",
+                                      lambda e: float(e.physics.named.data.qpos["hinge_1"][0]))
     assert max(np.cos(tops)) > 0.99  # the pole passes upright
-    assert pumped[0] >= 150.0
-    assert yardsticks._returns(env, laws["no force"], 1)[0] < 150.0  # hanging still does not: the bound can fail
+    assert pumped >= 150.0
+    assert still < 150.0  # hanging still does not: the bound can fail
 
 
 def test_the_reach_law_on_the_dmc_2d_grid_puts_the_finger_on_the_hard_target_and_pushing_nothing_does_not():
-    yardsticks = _script("dmc_yardsticks")
-    laws = dict(yardsticks.controllers()["dmc:reacher-hard"])
+    reached, gaps, still, rounded = _watched(
+        "dmc:reacher-hard", "joint-space PD on the inverse kinematics rounded to the dmc_2d preset's 3x3 grid",
+        lambda e: e.physics.finger_to_target_dist())
+    assert gaps[-1] < 0.025  # the finger ends on the target (its radius and the finger's)
+    assert reached >= 900.0
+    assert still < 100.0  # an arm left alone does not: the bound can fail
     from somarm.tasks.dmc import SuiteEnv
 
     env = SuiteEnv("reacher", "hard")
-    gaps = []
-    rounded = laws["joint-space PD on the inverse kinematics rounded to the dmc_2d preset's 3x3 grid"]
     assert set(np.unique(np.concatenate([rounded(env.reset(seed=k)[0]) for k in range(5)]))) <= {-1.0, 0.0, 1.0}
-    reached = yardsticks._returns(env, rounded, 1, watch=lambda episode, e, a: gaps.append(e.physics.finger_to_target_dist()))
-    assert gaps[-1] < 0.025  # the finger ends on the target (its radius and the finger's)
-    assert reached[0] >= 900.0
-    assert yardsticks._returns(env, laws["no force"], 1)[0] < 100.0  # an arm left alone does not: the bound can fail
+    env.close()
