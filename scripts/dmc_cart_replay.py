@@ -2,7 +2,8 @@
 task's preset (or ``--preset``, changed by ``--set KEY=VALUE``) for ``--samples`` steps at a tuning seed,
 then replay its greedy policy (the interpolated response, SOM-Q+) over the suite's episodes 0 to
 ``--episodes`` - 1 and print, per episode, the return, how far the cart went, the first step it came
-within 5 cm of the end of its rail, the first step the pole fell below horizontal, the highest the pole
+within 5 cm of the end of its rail, the first step the pole fell below horizontal (0 on the swing-up, whose
+pole starts hanging), the highest the pole
 rose (the largest cosine of its angle from upright) and the steps it spent within 30 degrees of upright,
 and the mean absolute force. One JSON line per episode. Used by docs/benchmarks/dmc/TUNING.md.
 

@@ -1,6 +1,7 @@
-"""Yardsticks for SOM-Q on the suite: what simple fixed controllers earn on dmc:cartpole-balance,
-dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episodes (reset seeds 0 to
-``--episodes`` - 1), and with ``--through`` how much of each controller SOM-Q's maps can hold.
+"""Yardsticks for SOM-Q on the suite: what simple fixed controllers earn on the dmc report's tasks over the
+suite's 1,000-step episodes (reset seeds 0 to ``--episodes`` - 1), with ``--through`` how much of each
+controller SOM-Q's maps can hold, and with ``--hold`` what the pendulum hold earns on tuning seeds' own
+evaluation episodes.
 
 - cartpole-balance: no force at all; the discrete-time LQR law of the pole linearised round upright
   (the suite's own physics, differentiated numerically at the control timestep); the same law rounded to
@@ -18,7 +19,7 @@ dmc:pendulum-swingup and dmc:point_mass-easy over the suite's 1,000-step episode
   ``dmc_2d`` (-1, 0, 1 per axis).
 - reacher-easy and reacher-hard: a joint-space PD law on the arm's inverse kinematics (``reach``: the target
   is the finger plus ``to_target``, the joint angles that put the finger there are solved for the elbow
-  nearer the arm's own, ``u = clip(10 (q* - q) - q')``, the link lengths read from the model), as it is and
+  solution nearer the arm's own angles, ``u = clip(10 (q* - q) - q')``, the link lengths read from the model), as it is and
   rounded to the 3x3 grid of ``dmc_2d`` (-1, 0, 1 per joint).
 
 ``--through``: each controller (rounded to a grid SOM-Q can answer with) as SOM-Q holds it when it
@@ -35,6 +36,7 @@ Prints one JSON line per row. Used by docs/benchmarks/dmc/TUNING.md.
 
     python scripts/dmc_yardsticks.py --episodes 5
     python scripts/dmc_yardsticks.py --through --seed 100 --states 50000 [--task dmc:pendulum-swingup]
+    python scripts/dmc_yardsticks.py --hold 100-111 --episodes 30
 """
 
 from __future__ import annotations
@@ -81,6 +83,10 @@ THROUGH = {
         "input_groups=pairs input_shape=10x10 k_nearest=3 local_linear=true shared_slopes=true"])
        for level in ("easy", "hard")},
 }
+
+#: The preset a task's ``--through`` rows change, where not the task's own: cartpole-swingup's rows hold the
+#: pump in the ``dmc`` recipe's map and forces (a sixth of the box), what its rows were run on.
+THROUGH_PRESET = {"dmc:cartpole-swingup": "dmc"}
 
 #: The map shapes the controller is read through at its nearest unit, per task (with ``--through``).
 AT_UNITS = {"dmc:pendulum-swingup": [(30, 30), (50, 50)],
@@ -171,7 +177,8 @@ def pump(force: float):
 
 def reach(env: SuiteEnv, gain: float = 10.0, damping: float = 1.0):
     """A joint-space PD law on the suite reacher's inverse kinematics: the finger sent to the target (the
-    finger plus ``to_target``) through the joint angles that put it there, the elbow nearer the arm's own."""
+    finger plus ``to_target``) through the joint angles that put it there, of the two elbow solutions the
+    one with the smaller summed joint error from the arm's own angles."""
     model = env.physics.model
     upper = float(np.linalg.norm(model.body("hand").pos[:2]))  # shoulder to wrist
     lower = float(np.linalg.norm(model.body("finger").pos[:2]))  # wrist to finger
@@ -246,6 +253,7 @@ def _through(task: str, law, args) -> list[dict]:
     from somarm.tasks.dmc import gym_id
 
     noise, representations = THROUGH[task]
+    preset = THROUGH_PRESET.get(task, tasks.record(task).preset)
     env = SuiteEnv(*split_name(task))
     rows, visited = [], {}  # the controller's states once per bounds: (scaling, states, actions)
     for row in representations:
@@ -258,8 +266,8 @@ def _through(task: str, law, args) -> list[dict]:
         scaling, states, actions = visited[key]
         changes = parse_settings(SOMQConfig, dict(item.split("=", 1) for item in text.split()))
         policy = yardsticks.through_representation(gym_id(task), states, actions, scaling, changes, args.seed,
-                                                   preset=tasks.record(task).preset)
-        rows.append({"task": task, "held by": f"the {tasks.record(task).preset} preset" + (f", {text}" if text else ""),
+                                                   preset=preset)
+        rows.append({"task": task, "held by": f"the {preset} preset" + (f", {text}" if text else ""),
                      "bounds": [low, high], "seed": args.seed, "states": args.states, "noise": noise,
                      "returns": _returns(env, policy, args.episodes)})
     for shape in AT_UNITS.get(task, []):
@@ -275,6 +283,27 @@ def _through(task: str, law, args) -> list[dict]:
     return rows
 
 
+def hold_on_seeds(seeds: list[int], episodes: int) -> list[dict]:
+    """``pendulum_hold`` on each tuning seed's own evaluation episodes of dmc:pendulum-swingup (the starts
+    ``scripts/tune_dmc.py`` scores a seed on, drawn in order: the first 10 of 30 are its default 10)."""
+    from somarm import tasks
+    from somarm.learners import presets
+    from somarm.run.evaluation import episode_starts
+
+    name = "dmc:pendulum-swingup"
+    rows = []
+    for seed in seeds:
+        asked = presets.task_params_of(tasks.record(name).preset, name)
+        judge = tasks.make(name, seed=seed, **tasks.record(name).complete(tasks.check_params(name, asked), seed))
+        returns = judge.run_episodes(lambda x, scaling=judge.scaling: pendulum_hold(scaling.unscale(x)),
+                                     episode_starts(judge, episodes, seed))["returns"]
+        judge.close()
+        rows.append({"task": name, "controller": "pendulum_hold", "seed": seed,
+                     "returns": [round(float(x), 1) for x in returns],
+                     "first 10": round(float(np.mean(returns[:10])), 1)})
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=5)
@@ -283,7 +312,18 @@ def main() -> None:
     parser.add_argument("--states", type=int, default=50_000, help="with --through: the controller's states learned")
     every = controllers()
     parser.add_argument("--task", choices=list(every), default=None, help="one task's rows (default: every task's)")
+    parser.add_argument("--hold", default=None, metavar="FIRST-LAST",
+                        help="the pendulum hold on these tuning seeds' own evaluation episodes (--episodes of them)")
     args = parser.parse_args()
+    if args.hold is not None:
+        first, _, last = args.hold.partition("-")
+        if not (first.isdigit() and (last or first).isdigit()
+                and 100 <= int(first) <= int(last or first) <= 199):
+            raise SystemExit(f"--hold {args.hold}: give tuning seeds FIRST-LAST within 100-199")
+        for row in hold_on_seeds(list(range(int(first), int(last or first) + 1)), args.episodes):
+            row["mean"] = round(float(np.mean(row["returns"])), 1)
+            print(json.dumps(row), flush=True)
+        return
     if args.through and not 100 <= args.seed <= 199:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     if args.through and args.task not in (None, *THROUGH):

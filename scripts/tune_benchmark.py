@@ -14,16 +14,23 @@ import argparse
 import json
 import time
 
+import numpy as np
+
 from somarm import tasks
 from somarm.learners import make, presets
 from somarm.run.evaluation import evaluation_rng
 
 
-def _train(task, learner, steps: int) -> None:
-    """``steps`` steps of one trial on an episodic task (as ``somarm compare`` trains)."""
+def _train(task, learner, steps: int) -> int:
+    """``steps`` steps of one trial on an episodic task (as ``somarm compare`` trains); returns how many of
+    them paid a positive reward."""
+    paid = 0
     for _ in range(steps):
         actions = learner.act(task.reset())
-        learner.learn(task.step(actions), task.next_observations, task.terminal)
+        rewards = task.step(actions)
+        paid += int(np.count_nonzero(np.asarray(rewards) > 0))
+        learner.learn(rewards, task.next_observations, task.terminal)
+    return paid
 
 
 def learner_for(task, settings, seed: int):
@@ -33,17 +40,18 @@ def learner_for(task, settings, seed: int):
                 seed=seed)
 
 
-def scores_at_rungs(task, judge, learner, starts, rungs) -> dict[int, tuple[float, float]]:
+def scores_at_rungs(task, judge, learner, starts, rungs) -> dict[int, tuple[float, float, np.ndarray, int]]:
     """Train ``learner`` on ``task`` up to each rung in turn: at each, the greedy mean return on ``judge``
-    from ``starts`` and the training seconds so far."""
-    done, wall, scores = 0, 0.0, {}
+    from ``starts``, the training seconds so far, each episode's return, and the training steps so far
+    that paid a positive reward."""
+    done, wall, paid, scores = 0, 0.0, 0, {}
     for rung in rungs:
         start = time.perf_counter()
-        _train(task, learner, rung - done)
+        paid += _train(task, learner, rung - done)
         wall += time.perf_counter() - start
         done = rung
         returns = judge.run_episodes(lambda x, model=learner: model.predict(x[None])[0], starts)["returns"]
-        scores[rung] = (float(returns.mean()), wall)
+        scores[rung] = (float(returns.mean()), wall, np.asarray(returns, dtype=np.float64), paid)
     return scores
 
 
@@ -76,7 +84,7 @@ def main() -> None:
         task, judge = tasks.make(args.task, seed=seed, **params), tasks.make(args.task, seed=seed, **params)
         starts = judge.sample_starts(evaluation_rng(seed), args.episodes)
         scored = scores_at_rungs(task, judge, learner_for(task, settings, seed), starts, rungs)
-        scores = {rung: (round(mean, 2), round(wall, 1)) for rung, (mean, wall) in scored.items()}
+        scores = {rung: (round(mean, 2), round(wall, 1)) for rung, (mean, wall, _, _) in scored.items()}
         print(json.dumps({"seed": seed, "set": overrides, "task_set": args.task_set, "scores": scores}), flush=True)
 
 

@@ -5,7 +5,9 @@ One trial per seed: the task's preset (or ``--preset``) changed by ``--set KEY=V
 scored at each rung of ``--rungs`` by the mean undiscounted greedy return over ``--episodes`` fresh
 episodes of the seed (the reset seeds of the seed's evaluation stream; the observation scaling estimated
 at the seed where not given). Prints one JSON line per seed and appends it to ``--record`` (a JSON-lines
-file, e.g. docs/benchmarks/dmc/tuning.jsonl). For choosing settings on seeds 100-199 only.
+file, e.g. docs/benchmarks/dmc/tuning.jsonl): the score at each rung, each episode's return at the last
+(the episodes are drawn in order, so the first 10 of ``--episodes 30`` are the 10 of the default) and the
+training steps that paid a positive reward by each rung. For choosing settings on seeds 100-199 only.
 
     python scripts/tune_dmc.py dmc:cartpole-balance --seeds 100,101 --set gamma=0.99 \\
         --task-set 'observation_low=[-2,-1,-1,-2,-5]' --task-set 'observation_high=[2,1,1,2,5]'
@@ -94,13 +96,15 @@ def main() -> None:
         task, judge = tasks.make(name, seed=seed, **train_params), tasks.make(name, seed=seed, **params)
         starts = episode_starts(judge, args.episodes, seed)
         scored = scores_at_rungs(task, judge, learner_for(task, settings, seed), starts, rungs)
-        scores = {rung: round(mean, 1) for rung, (mean, _) in scored.items()}
-        wall = scored[rungs[-1]][1]
+        scores = {rung: round(mean, 1) for rung, (mean, *_) in scored.items()}
+        _, wall, returns, _ = scored[rungs[-1]]
         row = {"task": args.task, "seed": seed, "steps": samples, "preset": preset,
                "settings": [f"{k}={v}" for k, v in overrides.items()],
                "task_settings": [f"{k}={json.dumps(v)}" for k, v in given.items()],
                "train_task_settings": args.train_task_set,
                "action_repeat": args.action_repeat, "greedy": scores[samples], "rungs": scores, "episodes": args.episodes, "train_s": round(wall, 1),
+               "returns": [round(float(x), 1) for x in returns],
+               "paid_training_steps": {rung: paid for rung, (*_, paid) in scored.items()},
                "note": args.note}
         print(json.dumps(row), flush=True)
         if args.record:

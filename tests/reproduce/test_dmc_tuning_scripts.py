@@ -190,3 +190,10 @@ def test_the_reach_law_on_the_dmc_2d_grid_puts_the_finger_on_the_hard_target_and
     env = SuiteEnv("reacher", "hard")
     assert set(np.unique(np.concatenate([rounded(env.reset(seed=k)[0]) for k in range(5)]))) <= {-1.0, 0.0, 1.0}
     env.close()
+
+
+def test_the_hold_on_tuning_seeds_scores_where_an_evaluation_episode_starts_near_upright_and_nowhere_else():
+    rows = _script("dmc_yardsticks").hold_on_seeds([100, 101], 10)
+    assert [row["seed"] for row in rows] == [100, 101] and all(len(row["returns"]) == 10 for row in rows)
+    assert max(rows[0]["returns"]) > 900.0  # seed 100: an episode starts where the pole can be caught
+    assert max(rows[1]["returns"]) < 10.0  # seed 101: none does, so only a swing-up could score there
