@@ -45,6 +45,21 @@ def test_action_repeat_holds_each_action_k_suite_steps_and_sums_their_rewards():
     assert steps == 1000 // 4
 
 
+def test_a_tuning_row_records_each_episodes_return_and_the_training_steps_paid_by_each_rung(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    record = tmp_path / "rows.jsonl"
+    subprocess.run([sys.executable, str(SCRIPTS / "tune_dmc.py"), "dmc:point_mass-easy", "--seeds", "100",
+                    "--samples", "1500", "--rungs", "500", "--episodes", "3", "--record", str(record)],
+                   check=True, capture_output=True, timeout=300)
+    row, = [json.loads(line) for line in record.read_text().splitlines()]
+    assert len(row["returns"]) == 3 and row["greedy"] == pytest.approx(np.mean(row["returns"]), abs=0.06)
+    paid = row["paid_training_steps"]
+    assert list(paid) == ["500", "1500"] and 0 <= paid["500"] <= paid["1500"] <= 1500
+
+
 def test_the_lqr_law_through_the_dmc_presets_forces_balances_the_cartpole():
     yardsticks = _script("dmc_yardsticks")
     from somarm.tasks.dmc import SuiteEnv
