@@ -28,7 +28,7 @@ from somarm.tasks.dmc import SuiteEnv, split_name
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from dmc_yardsticks import _returns  # noqa: E402  (how the yardsticks play a suite episode)
-from tune_benchmark import _train, learner_for  # noqa: E402  (how the tuning scripts train)
+from tune_benchmark import _train, learner_for, seed_params  # noqa: E402  (how the tuning scripts train)
 
 #: The cartpole tasks replayed.
 TASKS = ("dmc:cartpole-balance", "dmc:cartpole-swingup")
@@ -75,8 +75,7 @@ def main() -> None:
         raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     preset = args.preset or tasks.record(args.task).preset
     settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in args.set))
-    params = tasks.record(args.task).complete(tasks.check_params(args.task, presets.task_params_of(preset, args.task)), args.seed)
-    task = tasks.make(args.task, seed=args.seed, **params)
+    task = tasks.make(args.task, seed=args.seed, **seed_params(args.task, args.seed, preset))
     learner = learner_for(task, settings, args.seed)
     _train(task, learner, args.samples)
     env = SuiteEnv(*split_name(args.task))

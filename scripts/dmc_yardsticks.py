@@ -43,6 +43,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import scipy.linalg
@@ -50,14 +52,19 @@ import scipy.linalg
 from somarm.reproduce.yardsticks import pendulum_hold
 from somarm.tasks.dmc import SuiteEnv, split_name
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from tune_benchmark import seed_params  # noqa: E402  (a tuning seed's task, as the tuning scripts make it)
+
+#: The suite's reacher tasks (one controller and one set of bounds for both).
+REACHERS = ("dmc:reacher-easy", "dmc:reacher-hard")
+
 #: The observation bounds the ``--through`` maps scale by (the region each controller keeps the task in).
 BOUNDS = {
     "dmc:cartpole-balance": ([-1.5, -1.0, -0.25, -1.5, -2.0], [1.5, 1.0, 0.25, 1.5, 2.0]),
     "dmc:cartpole-swingup": ([-1.8, -1.0, -1.0, -1.5, -10.0], [1.8, 1.0, 1.0, 1.5, 10.0]),
     "dmc:pendulum-swingup": ([-1.0, -1.0, -10.0], [1.0, 1.0, 10.0]),
     "dmc:point_mass-easy": ([-0.03, -0.03, -0.1, -0.1], [0.03, 0.03, 0.1, 0.1]),
-    **{f"dmc:reacher-{level}": ([-3.5, -2.8, -0.45, -0.45, -5.0, -5.0], [3.5, 2.8, 0.45, 0.45, 5.0, 5.0])
-       for level in ("easy", "hard")},
+    **dict.fromkeys(REACHERS, ([-3.5, -2.8, -0.45, -0.45, -5.0, -5.0], [3.5, 2.8, 0.45, 0.45, 5.0, 5.0])),
 }
 #: point_mass-easy's maps over the whole arena instead (a row of ``THROUGH`` may name other bounds).
 ARENA = ([-0.3, -0.3, -0.1, -0.1], [0.3, 0.3, 0.1, 0.1])
@@ -78,10 +85,9 @@ THROUGH = {
         ("", ([-1.0, -1.0, -4.0], [1.0, 1.0, 4.0])), ("", ([0.5, -1.0, -5.0], [1.0, 1.0, 5.0])),
         ("", ([0.8, -0.6, -4.0], [1.0, 0.6, 4.0]))]),
     "dmc:point_mass-easy": (0.3, [("input_groups=all", ARENA), ("", ARENA), "", "k_nearest=3"]),
-    **{f"dmc:reacher-{level}": (0.3, [
+    **dict.fromkeys(REACHERS, (0.3, [
         "", "input_shape=30x30", "k_nearest=3", "input_groups=0,1,2,3", "input_groups=0,1;2,3",
-        "input_groups=pairs input_shape=10x10 k_nearest=3 local_linear=true shared_slopes=true"])
-       for level in ("easy", "hard")},
+        "input_groups=pairs input_shape=10x10 k_nearest=3 local_linear=true shared_slopes=true"])),
 }
 
 #: The preset a task's ``--through`` rows change, where not the task's own: cartpole-swingup's rows hold the
@@ -90,7 +96,7 @@ THROUGH_PRESET = {"dmc:cartpole-swingup": "dmc"}
 
 #: The map shapes the controller is read through at its nearest unit, per task (with ``--through``).
 AT_UNITS = {"dmc:pendulum-swingup": [(30, 30), (50, 50)],
-            **{f"dmc:reacher-{level}": [(20, 20), (50, 50)] for level in ("easy", "hard")}}
+            **dict.fromkeys(REACHERS, [(20, 20), (50, 50)])}
 
 
 def _returns(env: SuiteEnv, policy, episodes: int, watch=None) -> list[float]:
@@ -237,10 +243,10 @@ def controllers() -> dict[str, list[tuple[str, object]]]:
              lambda o: pendulum_hold(o[None])[0])],
         "dmc:point_mass-easy": [
             ("PD rounded to the dmc_2d preset's 3x3 grid", lambda o: np.round(pd(o))), ("PD", pd)],
-        **{f"dmc:reacher-{level}": [
+        **dict.fromkeys(REACHERS, [
             ("joint-space PD on the inverse kinematics rounded to the dmc_2d preset's 3x3 grid",
              lambda o: np.round(ik(o))),
-            ("joint-space PD on the inverse kinematics", ik), ("no force", still)] for level in ("easy", "hard")},
+            ("joint-space PD on the inverse kinematics", ik), ("no force", still)]),
     }
 
 
@@ -287,20 +293,18 @@ def hold_on_seeds(seeds: list[int], episodes: int) -> list[dict]:
     """``pendulum_hold`` on each tuning seed's own evaluation episodes of dmc:pendulum-swingup (the starts
     ``scripts/tune_dmc.py`` scores a seed on, drawn in order: the first 10 of 30 are its default 10)."""
     from somarm import tasks
-    from somarm.learners import presets
     from somarm.run.evaluation import episode_starts
 
     name = "dmc:pendulum-swingup"
     rows = []
     for seed in seeds:
-        asked = presets.task_params_of(tasks.record(name).preset, name)
-        judge = tasks.make(name, seed=seed, **tasks.record(name).complete(tasks.check_params(name, asked), seed))
+        judge = tasks.make(name, seed=seed, **seed_params(name, seed, tasks.record(name).preset))
         returns = judge.run_episodes(lambda x, scaling=judge.scaling: pendulum_hold(scaling.unscale(x)),
                                      episode_starts(judge, episodes, seed))["returns"]
         judge.close()
         rows.append({"task": name, "controller": "pendulum_hold", "seed": seed,
                      "returns": [round(float(x), 1) for x in returns],
-                     "first 10": round(float(np.mean(returns[:10])), 1)})
+                     "first 10": round(float(np.mean(returns[:10])), 1), "mean": round(float(np.mean(returns)), 1)})
     return rows
 
 
@@ -321,7 +325,6 @@ def main() -> None:
                 and 100 <= int(first) <= int(last or first) <= 199):
             raise SystemExit(f"--hold {args.hold}: give tuning seeds FIRST-LAST within 100-199")
         for row in hold_on_seeds(list(range(int(first), int(last or first) + 1)), args.episodes):
-            row["mean"] = round(float(np.mean(row["returns"])), 1)
             print(json.dumps(row), flush=True)
         return
     if args.through and not 100 <= args.seed <= 199:

@@ -33,6 +33,14 @@ def _train(task, learner, steps: int) -> int:
     return paid
 
 
+def seed_params(name: str, seed: int, preset: str, given: dict | None = None, scaled_as: str | None = None) -> dict:
+    """Task ``name``'s parameters at tuning seed ``seed``: how ``preset`` scales its task (``scaled_as``,
+    default ``name``: ``presets.task_params_of``) with ``given`` over it, completed at the seed (the
+    observation scaling estimated there where not given)."""
+    asked = presets.task_params_of(preset, scaled_as or name)
+    return tasks.record(name).complete(tasks.check_params(name, {**asked, **(given or {})}), seed)
+
+
 def learner_for(task, settings, seed: int):
     """SOM-Q with ``settings`` over ``task``'s observation and action boxes, seeded by ``seed``."""
     return make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
@@ -78,9 +86,8 @@ def main() -> None:
         if not 100 <= seed <= 199:
             raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
         # The observation scaling estimated at the seed, the task of the seed, fresh episodes of the seed.
-        task_params = {**presets.task_params_of(record.preset, args.task),
-                       **{key: json.loads(value) for key, value in (item.split("=", 1) for item in args.task_set)}}
-        params = record.complete(tasks.check_params(args.task, task_params), seed)
+        params = seed_params(args.task, seed, record.preset,
+                             {key: json.loads(value) for key, value in (item.split("=", 1) for item in args.task_set)})
         task, judge = tasks.make(args.task, seed=seed, **params), tasks.make(args.task, seed=seed, **params)
         starts = judge.sample_starts(evaluation_rng(seed), args.episodes)
         scored = scores_at_rungs(task, judge, learner_for(task, settings, seed), starts, rungs)
