@@ -42,7 +42,7 @@ import numpy as np
 from somarm.learners._kernels import _pull, _pull_action, grid_row, neighbourhood_row, perturbation, wrapped
 from somarm.learners.growing import grow
 
-__all__ = ["features", "act_kernel", "learn_kernel", "predict_kernel", "greedy_kernel"]
+__all__ = ["features", "features_kernel", "act_kernel", "learn_kernel", "predict_kernel", "greedy_kernel"]
 
 @numba.njit(cache=True, nogil=True)
 def features(x, weights, groups, shapes, k, units, phi, part, order, squared):
@@ -636,3 +636,16 @@ def greedy_kernel(observations, input_weights, q, slopes, places, linear, factor
                                              places[trial], linear, factored, action_shape, mid, span, groups,
                                              shapes[trial], k, scratch)
             first_out[trial, n] = scratch[4][0, 0]
+
+
+@numba.njit(cache=True, nogil=True)
+def features_kernel(observations, input_weights, groups, shapes, k, active, units, phi):
+    """Each ``active`` trial's nearest units and their weights for ``observations (n_trials, obs_dim)``, into
+    ``units``/``phi`` ``(n_trials, G, k)`` (what ``act_kernel`` finds, with nothing chosen or drawn)."""
+    part = np.empty(groups.shape[1])
+    order = np.empty(k + 1, dtype=np.int64)
+    squared = np.empty(k + 1)
+    for trial in range(observations.shape[0]):
+        if active[trial]:
+            features(observations[trial], input_weights[trial], groups, shapes[trial], k, units[trial], phi[trial], part,
+                     order, squared)

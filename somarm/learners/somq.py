@@ -21,7 +21,7 @@ action boxes, observations, actions and rewards. Rules where the paper is brief:
 - ``predict`` is greedy: the best Q for the winning input unit, ties to the lowest index, no
   random number drawn and nothing learned.
 - random numbers: one row per step per trial, ``[explore?, random unit, tie-break, noise x
-  action_dim]`` (two per dimension for Gaussian noise, Box-Muller); the initial weights come
+  action_dim, replayed step x replay]`` (two per dimension for Gaussian noise, Box-Muller); the initial weights come
   from a separate child stream of the trial's learner seed (``learners.initial_generator``).
 """
 
@@ -35,6 +35,7 @@ import numpy as np
 from somarm.learners import _kernels, grouping, groups, growing, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
+from somarm.learners.replay import Replay
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import grid_coordinates, grid_offsets, winners
 from somarm.learners.trail import Trail
@@ -46,7 +47,7 @@ __all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig",
 #: The settings that choose how the state is seen and Q is held and learned beyond the paper's one map
 #: (``somarm.learners.groups``); at ``SOMQConfig``'s defaults they are the paper's model.
 REPRESENTATION_SETTINGS = ("input_groups", "k_nearest", "grow_every", "local_linear", "shared_slopes",
-                           "action_slopes", "action_factored", "action_gap", "n_step")
+                           "action_slopes", "action_factored", "action_gap", "n_step", "replay")
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
@@ -175,6 +176,16 @@ class SOMQConfig(ConfigBase):
     the reward only through the states it leads to, this carries its effect in the rewards themselves rather
     than in a small difference between the next states' values. Needs gamma > 0; runs the grouped kernels."""
 
+    replay: int = 0
+    """Kept steps learned from again after each step (``somarm.learners.replay``; experience replay, Lin 1992):
+    each trial keeps its last ``replay_capacity`` learned steps and relearns ``replay`` of them, drawn uniformly,
+    after every new one. A replayed step moves Q alone (its target with today's Q, over both neighbourhoods),
+    never a map. Where a reward is rare, its few steps are learned from many times. 0 is the paper's model
+    (each step learned from once); above 0 runs the grouped kernels."""
+
+    replay_capacity: int = 100_000
+    """With ``replay``: the learned steps each trial keeps, the oldest overwritten first."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -225,6 +236,14 @@ class SOMQConfig(ConfigBase):
         object.__setattr__(self, "n_step", int(self.n_step))
         if self.n_step > 1 and self.gamma == 0.0:
             raise ValueError(f"n_step={self.n_step} looks ahead through later rewards: it needs gamma > 0, got gamma=0")
+        for name, least in (("replay", 0), ("replay_capacity", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+                raise ValueError(f"{name} must be a whole number >= {least}, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        if self.replay and self.grow_every:
+            raise ValueError("replay applies to maps of a fixed size: it needs grow_every=0, "
+                             f"got grow_every={self.grow_every}")
         if self.n_step > 1 and self.grow_every:
             raise ValueError("n_step > 1 applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
@@ -236,7 +255,7 @@ class SOMQConfig(ConfigBase):
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
         return (self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
-                or self.action_factored or self.action_gap > 0.0 or self.n_step > 1)
+                or self.action_factored or self.action_gap > 0.0 or self.n_step > 1 or self.replay > 0)
 
     def slope_rows(self, action_dim: int) -> int:
         """Slope vectors per input unit with ``local_linear``: one per table column, one where shared, and one
@@ -281,8 +300,8 @@ def paper_representation() -> dict[str, object]:
 
 
 def row_width(config: SOMQConfig, action_dim: int) -> int:
-    """Random numbers per step per trial: explore?, random unit, tie-break, then the noise."""
-    return 3 + action_dim * (2 if config.noise == "gaussian" else 1)
+    """Random numbers per step per trial: explore?, random unit, tie-break, the noise, then one per replayed step."""
+    return 3 + action_dim * (2 if config.noise == "gaussian" else 1) + config.replay
 
 
 class SOMQLearner(MapLearner):
@@ -326,6 +345,9 @@ class SOMQLearner(MapLearner):
                 n_floats += n_trials * n_maps * n_s * config.slope_rows(action_dim) * size
             n_floats += Trail.floats(config.n_step, n_trials=n_trials, obs_dim=size, action_dim=action_dim,
                                      n_groups=n_maps, k=config.k_nearest)
+            if config.replay:
+                n_floats += Replay.floats(config.replay_capacity, n_trials=n_trials, obs_dim=size, action_dim=action_dim)
+                n_floats += n_trials * (config.replay + 2 * n_maps * config.k_nearest + n_maps * n_s)
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -396,6 +418,17 @@ class SOMQLearner(MapLearner):
                             action_dim=self.action_dim, n_groups=self._group_units.shape[1], k=self._group_units.shape[2])
         for name in Trail.ARRAYS:
             setattr(self, "_trail_" + name, getattr(self._trail, name))
+        # The learned steps kept to learn from again (none kept without replay), under the names they are saved by;
+        # the step's numbers that pick them (left by act for learn), and the nearest units of a replayed step.
+        self._replay = Replay(cfg.replay_capacity if cfg.replay else 0, n_trials=self.n_trials, obs_dim=self.obs_dim,
+                              action_dim=self.action_dim)
+        for name in Replay.ARRAYS:
+            setattr(self, "_replay_" + name, getattr(self._replay, name))
+        self._replay_numbers = np.zeros((self.n_trials, cfg.replay))
+        kept = cfg.replay > 0  # without replay these are empty
+        self._replayed_units = np.zeros_like(self._group_units[:self.n_trials * kept])
+        self._replayed_phi = np.zeros_like(self._phi[:self.n_trials * kept])
+        self._replayed_errors = np.zeros_like(self._errors[:self.n_trials * kept])  # replays add to no map's errors
         # The grouped kernel's per-trial discounts and mask (the paper's kernel takes gamma and every trial).
         self._discounts = np.zeros(self.n_trials if cfg.grouped else 0)
         self._all_trials = np.ones(self.n_trials if cfg.grouped else 0, dtype=np.bool_)
@@ -420,15 +453,17 @@ class SOMQLearner(MapLearner):
     # ``_shapes`` and ``_errors``: each map's current grid and its units' summed errors (grouped maps only).
     # ``slopes``: each unit's local linear model (``local_linear`` only; a 1x1x1 placeholder otherwise).
     # ``_trail_*``: the steps that wait for their n-step target (``n_step`` > 1 only; empty otherwise).
+    # ``_replay_*``: the learned steps kept to learn from again (``replay`` > 0 only; empty otherwise).
     _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors", "slopes") + tuple(
-        "_trail_" + name for name in Trail.ARRAYS)
+        "_trail_" + name for name in Trail.ARRAYS) + tuple("_replay_" + name for name in Replay.ARRAYS)
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     # ``_group_units`` and ``_phi``: each map's k nearest units and their weights (grouped maps only).
-    _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted", "_group_units", "_phi")
+    # ``_replay_numbers``: the step's numbers that pick its replayed steps.
+    _PENDING_ARRAYS = MapLearner._PENDING_ARRAYS + ("_shifted", "_group_units", "_phi", "_replay_numbers")
     # Files saved before these existed load with ``_shifted`` all False (nothing shifts: the winner
     # response) and the paper's one map (no groups).
-    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes") + tuple(
-        "_trail_" + name for name in Trail.ARRAYS)
+    _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes", "_replay_numbers") + tuple(
+        "_trail_" + name for name in Trail.ARRAYS) + tuple("_replay_" + name for name in Replay.ARRAYS)
 
     def _check_restored(self) -> None:
         trail, most = self._trail, self._trail.observations.shape[0] - 1
@@ -440,6 +475,10 @@ class SOMQLearner(MapLearner):
                 (trail.chosen >= 0) & (trail.chosen < n_actions)).all():
             raise ValueError(f"_trail_units must name input units 0 to {rows - 1} and _trail_chosen action units "
                              f"0 to {n_actions - 1}")
+        replay = self._replay
+        if replay.count.size and not ((replay.count >= 0).all() and (
+                (replay.chosen >= 0) & (replay.chosen < n_actions)).all()):
+            raise ValueError(f"_replay_count must be >= 0 and _replay_chosen must name action units 0 to {n_actions - 1}")
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -459,6 +498,8 @@ class SOMQLearner(MapLearner):
         if not _kernels.all_finite(x):  # before a random row is used
             raise ValueError("observations must be finite, got NaN or inf")
         rows = self._streams.next()
+        if self.config.replay:
+            self._replay_numbers[...] = rows[:, rows.shape[1] - self.config.replay:]
         values = self._current()
         if self._trail.n > 1 and self._trail.count.any():  # a new episode: the waiting steps bootstrap where it broke
             due = self._trail.due_before_act(x)
@@ -517,6 +558,7 @@ class SOMQLearner(MapLearner):
             np.multiply(bootstrap, self.config.gamma, out=self._discounts)
             self._grouped_learn(r, x_next, self._discounts, self._all_trials, self._observations, self._group_units,
                                 self._phi, self._units, self._actions, values)
+            self._replay.push(self._all_trials, r, self._discounts, self._observations, self._units, self._actions, x_next)
         else:
             _kernels.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
@@ -525,21 +567,27 @@ class SOMQLearner(MapLearner):
                 self._offsets_s, self._offsets_a, self.config.neighbourhood_q, self._shifted,
                 self.action_low, self.action_high, self._wrap,
             )
+        if self.config.replay:
+            self._replay_rounds(values)
         self._pending = False
         self.t += 1
 
     def _grouped_learn(self, returns, x_next, discounts, active, observations, units, phi, chosen, actions,
-                       values) -> None:
+                       values, *, replayed: bool = False) -> None:
         """Steps 6 to 9 of the grouped kernels for the ``active`` trials' steps (``observations`` ... ``actions``,
-        what an ``act`` left), towards ``returns + discounts max_a Q(x_next, a)``."""
+        what an ``act`` left), towards ``returns + discounts max_a Q(x_next, a)``; a ``replayed`` step moves Q
+        alone (``somarm.learners.replay``)."""
         cfg = self.config
+        if replayed:
+            values = dict(values, lambda_s=0.0, lambda_a=0.0)
         groups.learn_kernel(
             returns, x_next, discounts, active, observations, units, phi, chosen, actions, self.input_weights,
             self.action_weights, self.q, self.slopes, self._action_places(), cfg.local_linear, cfg.action_factored,
             self._action_grid_shape, self._mid, self._span, self._groups, self._shapes, cfg.k_nearest, values["alpha"],
             values["lambda_s"], values["lambda_a"], values["n_s"], values["n_a"], self._offsets_s, self._offsets_a,
-            cfg.neighbourhood_q, self.action_low, self.action_high, self._wrap, self._errors,
-            cfg.grow_every > 0 and (self.t + 1) % cfg.grow_every == 0, cfg.action_gap,
+            cfg.neighbourhood_q, self.action_low, self.action_high, self._wrap,
+            self._replayed_errors if replayed else self._errors,
+            not replayed and cfg.grow_every > 0 and (self.t + 1) % cfg.grow_every == 0, cfg.action_gap,
         )
 
     def _learn_rounds(self, due: np.ndarray, bootstrap: np.ndarray, values) -> None:
@@ -547,6 +595,21 @@ class SOMQLearner(MapLearner):
         last = self._trail.last
         for active, returns, discounts, observations, units, phi, chosen, actions in self._trail.rounds(due, bootstrap):
             self._grouped_learn(returns, last, discounts, active, observations, units, phi, chosen, actions, values)
+            self._replay.push(active, returns, discounts, observations, chosen, actions, last)
+
+    def _replay_rounds(self, values) -> None:
+        """Learn again from ``replay`` kept steps of each trial, each picked by one of the step's numbers, the
+        nearest units of each found on today's maps (``somarm.learners.replay``)."""
+        cfg = self.config
+        for j in range(cfg.replay):
+            active, returns, discounts, observations, chosen, actions, x_next = self._replay.sample(
+                self._replay_numbers[:, j])
+            if not active.any():
+                return
+            groups.features_kernel(observations, self.input_weights, self._groups, self._shapes, cfg.k_nearest, active,
+                                   self._replayed_units, self._replayed_phi)
+            self._grouped_learn(returns, x_next, discounts, active, observations, self._replayed_units,
+                                self._replayed_phi, chosen, actions, values, replayed=True)
 
     def greedy_units(self, observations) -> tuple[np.ndarray, np.ndarray]:
         """The winning input unit and its best action unit (ties to the lowest index).

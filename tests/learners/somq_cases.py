@@ -36,3 +36,19 @@ def batch_and_alone(config: SOMQConfig, drive, steps: int):
     drive(batch, steps)
     drive(alone, steps)
     return batch, alone
+
+
+def drive_episodes(learner, steps, seed=6):
+    """Each trial walks its own chain from its own stream (by trial id), ending episodes at terminal states and
+    at time limits at different steps in different trials."""
+    streams = [np.random.default_rng([seed, int(i)]) for i in learner.trial_ids]
+    low, high = learner.observation_low, learner.observation_high
+    x = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
+    for _ in range(steps):
+        actions = learner.act(x)
+        nxt = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
+        ends = np.array([rng.random() for rng in streams])
+        terminal = ends < 0.08
+        learner.learn(-np.abs(actions).sum(axis=1) + x[:, 0], nxt, terminal)
+        restart = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
+        x = np.where((ends < 0.16)[:, None], restart, nxt)  # terminal, or a time limit: a new episode

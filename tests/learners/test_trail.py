@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from somq_cases import BOX4, batch_and_alone, small_config
+from somq_cases import BOX4, batch_and_alone, drive_episodes, small_config
 
 from somarm.learners.schedules import Schedule
 from somarm.learners.somq import SOMQConfig, SOMQLearner
@@ -94,27 +94,11 @@ def test_the_rounds_sum_each_trials_own_rewards_and_discount_by_its_own_steps():
     assert trail.count.tolist() == [0, 1] and trail.rewards[0, 1] == 20.0  # the second trial's newer step stays
 
 
-def _drive_episodes(learner, steps, seed=6):
-    """Each trial walks its own chain from its own stream (by trial id), ending episodes at terminal states and
-    at time limits at different steps in different trials."""
-    streams = [np.random.default_rng([seed, int(i)]) for i in learner.trial_ids]
-    low, high = learner.observation_low, learner.observation_high
-    x = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
-    for _ in range(steps):
-        actions = learner.act(x)
-        nxt = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
-        ends = np.array([rng.random() for rng in streams])
-        terminal = ends < 0.08
-        learner.learn(-np.abs(actions).sum(axis=1) + x[:, 0], nxt, terminal)
-        restart = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
-        x = np.where((ends < 0.16)[:, None], restart, nxt)  # terminal, or a time limit: a new episode
-
-
 @pytest.mark.parametrize("changes", [{"n_step": 3}, {"n_step": 5, "input_groups": "pairs", "k_nearest": 2},
                                      {"n_step": 2, "input_groups": "pairs", "local_linear": True,
                                       "shared_slopes": True, "response": "interpolated"}])
 def test_a_trial_alone_equals_the_same_trial_in_a_batch_with_n_step_targets(changes):
-    batch, alone = batch_and_alone(small_config((3, 3), True, 0.8).with_changes(changes), _drive_episodes, 150)
+    batch, alone = batch_and_alone(small_config((3, 3), True, 0.8).with_changes(changes), drive_episodes, 150)
     for name in ("input_weights", "action_weights", "q", "slopes", "_trail_rewards", "_trail_phi", "_trail_count"):
         np.testing.assert_array_equal(_trial(getattr(batch, name), name, 2), _trial(getattr(alone, name), name, 0))
     assert batch.q.any()
@@ -129,15 +113,15 @@ def _trial(array, name, trial):
 def test_n_step_targets_learn_other_values_than_one_step_targets():
     one, three = (SOMQLearner(small_config((3, 3), True, 0.8).with_changes({"n_step": n, "k_nearest": 2}),
                               n_trials=1, seed=2, **BOX4) for n in (1, 3))
-    _drive_episodes(one, 60)
-    _drive_episodes(three, 60)
+    drive_episodes(one, 60)
+    drive_episodes(three, 60)
     assert not np.allclose(one.q, three.q)
 
 
 def test_save_and_load_between_act_and_learn_continue_the_waiting_steps_exactly(tmp_path):
     config = small_config((3,), True, 0.8).with_changes({"n_step": 4, "input_groups": "pairs"})
     a = SOMQLearner(config, n_trials=2, seed=4, **BOX4)
-    _drive_episodes(a, 30)
+    drive_episodes(a, 30)
     a.act(a._trail.last.copy())  # the chains go on: the steps keep waiting
     assert a._trail.count.any()
     a.save(tmp_path / "l.npz")
@@ -145,7 +129,7 @@ def test_save_and_load_between_act_and_learn_continue_the_waiting_steps_exactly(
     np.testing.assert_array_equal(a._trail.count, b._trail.count)
     for learner in (a, b):
         learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
-        _drive_episodes(learner, 10)
+        drive_episodes(learner, 10)
     for name in ("input_weights", "action_weights", "q", "_trail_observations", "_trail_count"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
 
@@ -174,7 +158,7 @@ def test_n_step_runs_the_grouped_kernels_and_one_is_the_papers_path():
 def test_a_learner_file_with_waiting_steps_out_of_range_is_refused_in_one_line(tmp_path, name, value, message):
     learner = SOMQLearner(small_config((3,), True, 0.8).with_changes({"n_step": 4, "input_groups": "pairs"}),
                           n_trials=2, seed=4, **BOX4)
-    _drive_episodes(learner, 30)
+    drive_episodes(learner, 30)
     learner.save(tmp_path / "l.npz")
     arrays = dict(np.load(tmp_path / "l.npz", allow_pickle=False))
     arrays[name] = np.full_like(arrays[name], value)
