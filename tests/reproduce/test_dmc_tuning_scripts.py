@@ -212,3 +212,23 @@ def test_the_hold_on_tuning_seeds_scores_where_an_evaluation_episode_starts_near
     assert [row["seed"] for row in rows] == [100, 101] and all(len(row["returns"]) == 10 for row in rows)
     assert max(rows[0]["returns"]) > 900.0  # seed 100: an episode starts where the pole can be caught
     assert max(rows[1]["returns"]) < 10.0  # seed 101: none does, so only a swing-up could score there
+
+
+def test_the_catch_replay_counts_the_paid_steps_from_rest_the_hold_keeps_and_no_torque_loses():
+    from somarm.reproduce.yardsticks import pendulum_hold
+    from somarm.tasks.dmc import SuiteEnv
+
+    catch = _script("dmc_pendulum_catch")
+    env = SuiteEnv("pendulum", "swingup")
+    held = lambda o: pendulum_hold(o[None])[0]  # noqa: E731
+    (_, near), (_, far) = catch.catches(env, held, [5.0, 45.0], 200)
+    assert min(near) >= 190 and max(far) == 0  # held from 5 degrees either side; from 45 the torque cannot
+    assert max(catch.paid_from_rest(env, lambda o: np.zeros(1), sign * np.radians(5.0), 200) for sign in (-1, 1)) < 50
+    env.close()
+
+
+def test_units_near_upright_count_by_angle_and_speed():
+    catch = _script("dmc_pendulum_catch")
+    deg = np.radians([0.0, 9.0, -15.0, 0.0, 180.0])
+    units = np.stack([np.cos(deg), np.sin(deg), [0.0, 1.0, 0.0, 4.0, 0.0]], axis=1)
+    assert [catch.units_near_upright(units, d) for d in (10, 20)] == [2, 3]
