@@ -4,7 +4,8 @@ start the suite's pendulum at rest at each of ``--angles`` degrees either side o
 of ``--steps`` that the suite pays (within its 8 degrees), for the learned greedy policy (the interpolated
 response, SOM-Q+) and for the hold (``somarm.reproduce.yardsticks.pendulum_hold``, a PD law within 45 degrees)
 from the same starts. One JSON line per angle, then one with the training steps that were paid and how many
-of the input map's units lie within 10, 20 and 45 degrees of upright below 3 rad/s. Used by
+of the input map's units lie within 10, 20 and 45 degrees of upright below 3 rad/s, and how many different
+units answer for the starts. Used by
 docs/benchmarks/dmc/TUNING.md.
 
     python scripts/dmc_pendulum_catch.py --seed 100
@@ -88,8 +89,10 @@ def main() -> None:
         print(json.dumps({**head, "angle_deg": deg, "learned_paid": mine, "hold_paid": hold}), flush=True)
     units = task.unscale(learner.input_weights[0])
     near = {deg: units_near_upright(units, deg) for deg in (10, 20, 45)}
-    print(json.dumps({**head, "paid_training_steps": paid, "map_units": len(units), "units_near_upright": near}),
-          flush=True)
+    rest = np.array([[np.cos(a), np.sin(a), 0.0] for deg in angles for a in np.radians([-deg, deg])])
+    winners, _ = learner.greedy_units(task.scale(rest)[None])
+    print(json.dumps({**head, "paid_training_steps": paid, "map_units": len(units), "units_near_upright": near,
+                      "units_answering_the_starts": len(set(winners[0].tolist()))}), flush=True)
     env.close()
     task.close()
 

@@ -329,10 +329,13 @@ WHY = ["Why each task ends where it does (and, where SOM-Q stops short, what was
        "at rest at 0, 5 and 10 degrees either side of upright (scripts/dmc_pendulum_catch.py), the hold keeps the "
        "pole in all 5 starts and dmc_pendulum in 2, 0, 0 and 1 on tuning seeds 100-103, having been paid in 56, "
        "62, 16 and 325 training steps: its map, whose units go where the states are, has 1 to 6 of its 900 units "
-       "within 10 degrees of upright, too few for a torque that must change sign there. Experience replay (8 "
+       "within 10 degrees of upright, and 1 to 3 of them answer for all five starts, too few for a torque that "
+       "must change sign there. Experience replay (8 "
        "kept steps relearned a step) learned from those few steps many times and kept 1 start at seeds 100 and "
        "102 (1.4, 0.0, 2.0 and 1.2 over 30 episodes on seeds 100-103); a map stretched over the top 45 degrees "
-       "swung the pole through the top in 20 of 30 episodes at seed 101, and caught it in none (TUNING.md).",
+       "swung the pole through the top in 20 of 30 episodes at seed 101, and caught it in none; one held fixed "
+       "over the top, so that upright states have units unvisited, caught one start at seeds 100 and 103 and "
+       "none at 101 and 102 (TUNING.md).",
        "- point_mass-easy: the PD law rounded to the dmc_2d grid reaches the target (903.7). Maps scaled over "
        "the arena cannot hold it (one map over the four dimensions 0.5 by imitation, a map per axis 237): the "
        "target is 3 cm across in a 60 cm arena, and the law switches inside it. The dmc_point_mass preset's "
