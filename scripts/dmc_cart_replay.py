@@ -23,12 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from somarm import tasks
-from somarm.learners import presets
 from somarm.tasks.dmc import SuiteEnv, split_name
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from dmc_yardsticks import _returns  # noqa: E402  (how the yardsticks play a suite episode)
-from tune_benchmark import _train, learner_for, seed_params  # noqa: E402  (how the tuning scripts train)
+from tune_benchmark import greedy_policy, trained  # noqa: E402  (how the tuning scripts train)
 
 #: The cartpole tasks replayed.
 TASKS = ("dmc:cartpole-balance", "dmc:cartpole-swingup")
@@ -71,16 +70,10 @@ def main() -> None:
     parser.add_argument("--preset", default=None, help="default: the task's")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = parser.parse_args()
-    if not 100 <= args.seed <= 199:
-        raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     preset = args.preset or tasks.record(args.task).preset
-    settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in args.set))
-    task = tasks.make(args.task, seed=args.seed, **seed_params(args.task, args.seed, preset))
-    learner = learner_for(task, settings, args.seed)
-    _train(task, learner, args.samples)
+    task, learner, _ = trained(args.task, args.seed, preset, args.set, args.samples)
     env = SuiteEnv(*split_name(args.task))
-    policy = lambda o: np.asarray(learner.predict(task.scale(o)[None])[0]).reshape(-1)  # noqa: E731
-    for row in replay(env, policy, args.episodes):
+    for row in replay(env, greedy_policy(learner, task), args.episodes):
         print(json.dumps({"task": args.task, "seed": args.seed, "preset": preset, "settings": args.set, "samples": args.samples, **row}),
               flush=True)
     env.close()

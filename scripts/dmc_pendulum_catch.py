@@ -22,12 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from somarm import tasks
-from somarm.learners import presets
 from somarm.reproduce.yardsticks import pendulum_hold
 from somarm.tasks.dmc import SuiteEnv, flatten
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from tune_benchmark import _train, learner_for, seed_params  # noqa: E402  (how the tuning scripts train)
+from tune_benchmark import greedy_policy, trained  # noqa: E402  (how the tuning scripts train)
 
 TASK = "dmc:pendulum-swingup"
 
@@ -70,16 +69,11 @@ def main() -> None:
     parser.add_argument("--angles", default="0,5,10,15,20,30,45", help="degrees from upright, comma-separated")
     parser.add_argument("--steps", type=int, default=300, help="steps from each start (50 a second)")
     args = parser.parse_args()
-    if not 100 <= args.seed <= 199:
-        raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
     preset = args.preset or tasks.record(TASK).preset
     samples = args.samples or tasks.record(TASK).n_steps
-    settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in args.set))
-    task = tasks.make(TASK, seed=args.seed, **seed_params(TASK, args.seed, preset))
-    learner = learner_for(task, settings, args.seed)
-    paid = _train(task, learner, samples)
+    task, learner, paid = trained(TASK, args.seed, preset, args.set, samples)
     env = SuiteEnv("pendulum", "swingup")
-    learned = lambda o: np.asarray(learner.predict(task.scale(o)[None])[0]).reshape(-1)  # noqa: E731
+    learned = greedy_policy(learner, task)
     held = lambda o: pendulum_hold(o[None])[0]  # noqa: E731
     angles = [float(a) for a in args.angles.split(",")]
     head = {"task": TASK, "seed": args.seed, "preset": preset, "settings": args.set, "samples": samples,

@@ -53,7 +53,7 @@ from somarm.reproduce.yardsticks import pendulum_hold
 from somarm.tasks.dmc import SuiteEnv, split_name
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from tune_benchmark import seed_params  # noqa: E402  (a tuning seed's task, as the tuning scripts make it)
+from tune_benchmark import seed_params, tuning_seed  # noqa: E402  (a tuning seed's task, as the tuning scripts make it)
 
 #: The suite's reacher tasks (one controller and one set of bounds for both).
 REACHERS = ("dmc:reacher-easy", "dmc:reacher-hard")
@@ -327,8 +327,8 @@ def main() -> None:
         for row in hold_on_seeds(list(range(int(first), int(last or first) + 1)), args.episodes):
             print(json.dumps(row), flush=True)
         return
-    if args.through and not 100 <= args.seed <= 199:
-        raise SystemExit(f"seed {args.seed}: tuning seeds are 100-199")
+    if args.through:
+        tuning_seed(args.seed)
     if args.through and args.task not in (None, *THROUGH):
         raise SystemExit(f"--through takes {', '.join(THROUGH)}, not {args.task}")
     rows = []

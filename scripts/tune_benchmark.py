@@ -18,7 +18,15 @@ import numpy as np
 
 from somarm import tasks
 from somarm.learners import make, presets
+from somarm.reproduce.benchmarks import TUNING_SEEDS
 from somarm.run.evaluation import evaluation_rng
+
+
+def tuning_seed(seed: int) -> int:
+    """``seed``, if it is a tuning seed (``TUNING_SEEDS``); else the scripts' one-line exit."""
+    if seed not in TUNING_SEEDS:
+        raise SystemExit(f"seed {seed}: tuning seeds are {TUNING_SEEDS.start}-{TUNING_SEEDS[-1]}")
+    return seed
 
 
 def _train(task, learner, steps: int) -> int:
@@ -46,6 +54,21 @@ def learner_for(task, settings, seed: int):
     return make("somq", settings, observation_low=task.observation_low, observation_high=task.observation_high,
                 action_low=task.action_low, action_high=task.action_high, action_periodic=task.action_periodic,
                 seed=seed)
+
+
+def trained(name: str, seed: int, preset: str, sets: list[str], samples: int):
+    """``preset`` changed by ``sets`` (``KEY=VALUE`` texts) trained on task ``name`` for ``samples`` steps at tuning
+    seed ``seed``: ``(task, learner, paid)``, ``paid`` the training steps that paid a positive reward."""
+    tuning_seed(seed)
+    settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in sets))
+    task = tasks.make(name, seed=seed, **seed_params(name, seed, preset))
+    learner = learner_for(task, settings, seed)
+    return task, learner, _train(task, learner, samples)
+
+
+def greedy_policy(learner, task):
+    """The trained ``learner``'s greedy policy on ``task``'s raw observations (one at a time) -> an action."""
+    return lambda o: np.asarray(learner.predict(task.scale(o)[None])[0]).reshape(-1)
 
 
 def scores_at_rungs(task, judge, learner, starts, rungs) -> dict[int, tuple[float, float, np.ndarray, int]]:
@@ -82,9 +105,7 @@ def main() -> None:
     if args.response:
         overrides["response"] = args.response
     settings = presets.get(record.preset).with_overrides(overrides)
-    for seed in (int(s) for s in args.seeds.split(",")):
-        if not 100 <= seed <= 199:
-            raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
+    for seed in (tuning_seed(int(s)) for s in args.seeds.split(",")):
         # The observation scaling estimated at the seed, the task of the seed, fresh episodes of the seed.
         params = seed_params(args.task, seed, record.preset,
                              {key: json.loads(value) for key, value in (item.split("=", 1) for item in args.task_set)})

@@ -25,7 +25,7 @@ from somarm.learners import presets
 from somarm.run.evaluation import episode_starts
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from tune_benchmark import learner_for, scores_at_rungs, seed_params  # noqa: E402  (the scoring both tuning scripts share)
+from tune_benchmark import learner_for, scores_at_rungs, seed_params, tuning_seed  # noqa: E402  (the scoring both tuning scripts share)
 
 
 def _register_repeat(name: str, k: int) -> str:
@@ -87,9 +87,7 @@ def main() -> None:
     preset = args.preset or tasks.record(args.task).preset
     settings = presets.get(preset).with_overrides(overrides)
     given = _task_set(args.task_set)
-    for seed in (int(s) for s in args.seeds.split(",")):
-        if not 100 <= seed <= 199:
-            raise SystemExit(f"seed {seed}: tuning seeds are 100-199")
+    for seed in (tuning_seed(int(s)) for s in args.seeds.split(",")):
         params = seed_params(name, seed, preset, given, scaled_as=args.task)
         train_params = {**params, **_task_set(args.train_task_set)}
         task, judge = tasks.make(name, seed=seed, **train_params), tasks.make(name, seed=seed, **params)
