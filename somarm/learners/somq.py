@@ -575,11 +575,9 @@ class SOMQLearner(MapLearner):
     def _grouped_learn(self, returns, x_next, discounts, active, observations, units, phi, chosen, actions,
                        values, *, replayed: bool = False) -> None:
         """Steps 6 to 9 of the grouped kernels for the ``active`` trials' steps (``observations`` ... ``actions``,
-        what an ``act`` left), towards ``returns + discounts max_a Q(x_next, a)``; a ``replayed`` step moves Q
-        alone (``somarm.learners.replay``)."""
+        what an ``act`` left), towards ``returns + discounts max_a Q(x_next, a)``; a ``replayed`` step (its
+        ``values`` with both maps' rates at 0) adds to no map's errors and grows no map."""
         cfg = self.config
-        if replayed:
-            values = dict(values, lambda_s=0.0, lambda_a=0.0)
         groups.learn_kernel(
             returns, x_next, discounts, active, observations, units, phi, chosen, actions, self.input_weights,
             self.action_weights, self.q, self.slopes, self._action_places(), cfg.local_linear, cfg.action_factored,
@@ -601,6 +599,7 @@ class SOMQLearner(MapLearner):
         """Learn again from ``replay`` kept steps of each trial, each picked by one of the step's numbers, the
         nearest units of each found on today's maps (``somarm.learners.replay``)."""
         cfg = self.config
+        q_alone = {**values, "lambda_s": 0.0, "lambda_a": 0.0}  # a replayed step moves no map
         for j in range(cfg.replay):
             active, returns, discounts, observations, chosen, actions, x_next = self._replay.sample(
                 self._replay_numbers[:, j])
@@ -609,7 +608,7 @@ class SOMQLearner(MapLearner):
             groups.features_kernel(observations, self.input_weights, self._groups, self._shapes, cfg.k_nearest, active,
                                    self._replayed_units, self._replayed_phi)
             self._grouped_learn(returns, x_next, discounts, active, observations, self._replayed_units,
-                                self._replayed_phi, chosen, actions, values, replayed=True)
+                                self._replayed_phi, chosen, actions, q_alone, replayed=True)
 
     def greedy_units(self, observations) -> tuple[np.ndarray, np.ndarray]:
         """The winning input unit and its best action unit (ties to the lowest index).

@@ -1,4 +1,4 @@
-"""Shared by the reference-equality tests (not collected): bounds, a small annealing config, the circle arc."""
+"""Shared by the learner tests (not collected): bounds, a small annealing config, the circle arc, a driver of episodes, the bytes a learner holds."""
 
 import numpy as np
 
@@ -52,3 +52,9 @@ def drive_episodes(learner, steps, seed=6):
         learner.learn(-np.abs(actions).sum(axis=1) + x[:, 0], nxt, terminal)
         restart = np.array([low + (high - low) * rng.random(low.size) for rng in streams])
         x = np.where((ends < 0.16)[:, None], restart, nxt)  # terminal, or a time limit: a new episode
+
+
+def held_bytes(learner) -> int:
+    """Bytes of the arrays a learner holds, each counted once (the Motoric Map's action grid is its input grid)."""
+    arrays = {id(value): value for value in vars(learner).values() if isinstance(value, np.ndarray)}
+    return sum(value.nbytes for value in arrays.values())

@@ -1,6 +1,8 @@
 import numpy as np
 import pytest
 
+from somq_cases import held_bytes
+
 from somarm import learners
 from somarm.learners.motoric import MotoricConfig, MotoricMap
 from somarm.learners.somq import SOMQConfig, SOMQLearner
@@ -129,12 +131,6 @@ def test_every_kind_is_layered_and_has_presets(kind):
     assert isinstance(presets.config_for(kind, "table2"), config_class)
 
 
-def _held_bytes(learner) -> int:
-    """Bytes of the arrays a learner holds, each counted once (the Motoric Map's action grid is its input grid)."""
-    arrays = {id(value): value for value in vars(learner).values() if isinstance(value, np.ndarray)}
-    return sum(value.nbytes for value in arrays.values())
-
-
 @pytest.mark.parametrize("kind", learners.LEARNERS)
 def test_every_kind_estimates_its_memory_in_one_place_the_registry_reaches(kind, monkeypatch):
     from somarm import validation
@@ -145,7 +141,7 @@ def test_every_kind_estimates_its_memory_in_one_place_the_registry_reaches(kind,
     learner = learners.make(kind, config, n_trials=3, **BOX)
     # What it allocates is covered: the arrays the learner holds fit inside the estimate, but for
     # a few numbers per trial and dimension (bounds, winners, chosen cells) that no estimate counts.
-    held = _held_bytes(learner)
+    held = held_bytes(learner)
     assert held <= n_bytes + 64 * (3 + 2 + 1)
     monkeypatch.setattr(validation, "_available_memory", lambda: int(n_bytes) - 1)
     with pytest.raises(ValueError, match=rf"^a {kind} learner with .* needs about .* of memory, more than"):
@@ -159,7 +155,7 @@ def test_a_ten_thousand_unit_input_map_holds_no_grid_distance_matrix(kind):
     assert n_bytes < 10e6  # a (10,000 x 10,000) distance matrix alone would take 800 MB
     learner = learners.make(kind, config, n_trials=1, observation_low=np.zeros(4), observation_high=np.ones(4),
                             action_low=np.zeros(1), action_high=np.ones(1))
-    assert _held_bytes(learner) <= n_bytes + 64 * (1 + 4 + 1)
+    assert held_bytes(learner) <= n_bytes + 64 * (1 + 4 + 1)
 
 
 def test_an_unknown_kind_has_no_memory_estimate():

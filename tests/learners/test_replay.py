@@ -3,7 +3,7 @@ that a rare reward's value spreads back sooner with it."""
 
 import numpy as np
 import pytest
-from somq_cases import BOX4, batch_and_alone, drive_episodes, small_config
+from somq_cases import BOX4, batch_and_alone, drive_episodes, held_bytes, small_config
 
 from somarm.learners.replay import Replay
 from somarm.learners.schedules import Schedule
@@ -136,6 +136,6 @@ def test_the_memory_estimate_covers_the_kept_steps():
     config = small_config((3, 3), True, 0.8).with_changes({"replay": 2, "replay_capacity": 500, "n_step": 3})
     _, n_bytes = learners.memory_needed("somq", config, n_trials=3, obs_dim=4, action_dim=2)
     learner = SOMQLearner(config, n_trials=3, seed=0, **BOX4)
-    held = sum(v.nbytes for v in {id(v): v for v in vars(learner).values() if isinstance(v, np.ndarray)}.values())
+    held = held_bytes(learner)
     kept = sum(getattr(learner, "_replay_" + name).nbytes for name in Replay.ARRAYS)
     assert kept >= 500 * 3 * (2 * 4 + 2 + 3) * 8 and held <= n_bytes + 64 * (3 + 4 + 2)
