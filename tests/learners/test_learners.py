@@ -1,6 +1,5 @@
 import numpy as np
 import pytest
-
 from somq_cases import held_bytes
 
 from somarm import learners
