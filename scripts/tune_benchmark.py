@@ -56,11 +56,28 @@ def learner_for(task, settings, seed: int):
                 seed=seed)
 
 
+def parse_sets(sets: list[str]) -> dict[str, str]:
+    """``--set KEY=VALUE`` texts by key; the scripts' one-line exit for one without ``=``."""
+    for item in sets:
+        if "=" not in item:
+            raise SystemExit(f"--set {item}: give KEY=VALUE")
+    return dict(item.split("=", 1) for item in sets)
+
+
+def preset_settings(preset: str, overrides: dict[str, str]):
+    """``preset``'s config changed by ``overrides`` (text by key); the scripts' one-line exit for an unknown
+    preset or a bad setting."""
+    try:
+        return presets.get(preset).with_overrides(overrides)
+    except ValueError as exc:
+        raise SystemExit(str(exc)) from None
+
+
 def trained(name: str, seed: int, preset: str, sets: list[str], samples: int):
     """``preset`` changed by ``sets`` (``KEY=VALUE`` texts) trained on task ``name`` for ``samples`` steps at tuning
     seed ``seed``: ``(task, learner, paid)``, ``paid`` the training steps that paid a positive reward."""
     tuning_seed(seed)
-    settings = presets.get(preset).with_overrides(dict(item.split("=", 1) for item in sets))
+    settings = preset_settings(preset, parse_sets(sets))
     task = tasks.make(name, seed=seed, **seed_params(name, seed, preset))
     learner = learner_for(task, settings, seed)
     return task, learner, _train(task, learner, samples)
@@ -101,10 +118,10 @@ def main() -> None:
     record = tasks.record(args.task)
     samples = args.samples or record.n_steps
     rungs = sorted({int(r) for r in args.rungs.split(",") if r} | {samples})
-    overrides = dict(item.split("=", 1) for item in args.set)
+    overrides = parse_sets(args.set)
     if args.response:
         overrides["response"] = args.response
-    settings = presets.get(record.preset).with_overrides(overrides)
+    settings = preset_settings(record.preset, overrides)
     for seed in (tuning_seed(int(s)) for s in args.seeds.split(",")):
         # The observation scaling estimated at the seed, the task of the seed, fresh episodes of the seed.
         params = seed_params(args.task, seed, record.preset,

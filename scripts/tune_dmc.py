@@ -21,11 +21,10 @@ import sys
 from pathlib import Path
 
 from somarm import tasks
-from somarm.learners import presets
 from somarm.run.evaluation import episode_starts
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from tune_benchmark import learner_for, scores_at_rungs, seed_params, tuning_seed  # noqa: E402  (the scoring both tuning scripts share)
+from tune_benchmark import learner_for, parse_sets, preset_settings, scores_at_rungs, seed_params, tuning_seed  # noqa: E402  (the scoring both tuning scripts share)
 
 
 def _register_repeat(name: str, k: int) -> str:
@@ -83,9 +82,9 @@ def main() -> None:
     record = tasks.record(name)
     samples = args.samples or record.n_steps
     rungs = sorted({int(r) for r in args.rungs.split(",") if r} | {samples})
-    overrides = dict(item.split("=", 1) for item in args.set)
+    overrides = parse_sets(args.set)
     preset = args.preset or tasks.record(args.task).preset
-    settings = presets.get(preset).with_overrides(overrides)
+    settings = preset_settings(preset, overrides)
     given = _task_set(args.task_set)
     for seed in (tuning_seed(int(s)) for s in args.seeds.split(",")):
         params = seed_params(name, seed, preset, given, scaled_as=args.task)

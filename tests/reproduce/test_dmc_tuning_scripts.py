@@ -232,3 +232,18 @@ def test_units_near_upright_count_by_angle_and_speed():
     deg = np.radians([0.0, 9.0, -15.0, 0.0, 180.0])
     units = np.stack([np.cos(deg), np.sin(deg), [0.0, 1.0, 0.0, 4.0, 0.0]], axis=1)
     assert [catch.units_near_upright(units, d) for d in (10, 20)] == [2, 3]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--seed", "5"], "seed 5: tuning seeds are 100-199"),
+    (["--set", "replay=x"], "replay=x: replay must be a whole number"),
+    (["--set", "replay"], "--set replay: give KEY=VALUE"),
+    (["--preset", "nope"], "unknown preset 'nope'; allowed: "),
+])
+def test_a_tuning_scripts_bad_argument_ends_in_one_line(args, message):
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, str(SCRIPTS / "dmc_pendulum_catch.py"), *args], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 1 and done.stderr.startswith(message) and done.stderr.count("\n") == 1, done.stderr
