@@ -2,8 +2,9 @@
 
 One trial per seed: the task's preset (or ``--preset``) changed by ``--set KEY=VALUE``, the task by
 ``--task-set KEY=JSON`` (``observation_low=[...]``: the scaling bounds), trained for ``--samples`` and
-scored at each rung of ``--rungs`` by the mean undiscounted greedy return over ``--episodes`` fresh
-episodes of the seed (the reset seeds of the seed's evaluation stream; the observation scaling estimated
+scored at each rung of ``--rungs`` (``--samples`` and the rungs count the task's steps: decisions of
+``action_repeat`` suite steps where the preset or ``--task-set`` holds actions, as the row's
+``action_repeat`` says) by the mean undiscounted greedy return over ``--episodes`` fresh episodes of the seed (the reset seeds of the seed's evaluation stream; the observation scaling estimated
 at the seed where not given). Prints one JSON line per seed and appends it to ``--record`` (a JSON-lines
 file, e.g. docs/benchmarks/dmc/tuning.jsonl): the score at each rung, each episode's return at the last
 (the episodes are drawn in order, so the first 10 of ``--episodes 30`` are the 10 of the default) and the
@@ -98,7 +99,7 @@ def main() -> None:
                "settings": [f"{k}={v}" for k, v in overrides.items()],
                "task_settings": [f"{k}={json.dumps(v)}" for k, v in given.items()],
                "train_task_settings": args.train_task_set,
-               "action_repeat": args.action_repeat, "greedy": scores[samples], "rungs": scores, "episodes": args.episodes, "train_s": round(wall, 1),
+               "action_repeat": args.action_repeat * int(params.get("action_repeat", 1)), "greedy": scores[samples], "rungs": scores, "episodes": args.episodes, "train_s": round(wall, 1),
                "returns": [round(float(x), 1) for x in returns],
                "paid_training_steps": {rung: paid for rung, (*_, paid) in scored.items()},
                "note": args.note}

@@ -174,9 +174,12 @@ _POINT_MASS_SCALING = {"observation_ranges": {"0": [-0.03, 0.03], "1": [-0.03, 0
                                               "3": [-0.1, 0.1]}}
 
 
-#: dmc:pendulum-swingup's scaling: the whole circle and +-10 rad/s (random torques never raise the pole, so
-#: the ranges they see end below the rewarded top).
-_PENDULUM_SCALING = {"observation_ranges": {"0": [-1.0, 1.0], "1": [-1.0, 1.0], "2": [-10.0, 10.0]}}
+#: How dmc_pendulum sees and acts on dmc:pendulum-swingup: the pole's angle (``angles``: the orientation's
+#: cosine and sine as one angle, 0 upright), so that its grid's cells lie evenly round the circle; the velocity
+#: over +-10 rad/s (random torques never raise the pole, so the range they see ends below the rewarded top);
+#: a decision every 5 of the suite's 20 ms steps (``action_repeat``), so that each pair of cells the model
+#: counts is a tenth of a second of the swing, not a step that mostly stays in its cell.
+_PENDULUM_SCALING = {"angles": [[0, 1]], "action_repeat": 5, "observation_ranges": {"1": [-10.0, 10.0]}}
 
 
 def _benchmark(name: str, env_id: str, changes: dict[str, object], task_params: dict | None = None) -> Preset:
@@ -229,7 +232,8 @@ def _benchmarks() -> tuple[Preset, ...]:
         "dmc:point_mass-easy", "none (the report's dmc part)", 5, None, task_params=_POINT_MASS_SCALING)
     swingup = Preset(
         "dmc_pendulum", "beyond the paper: the DeepMind Control Suite's dmc:pendulum-swingup",
-        dataclasses.replace(dmc.config, input_shape=(30, 30), grid_span=1.0, n_step=30, action_gap=0.5),
+        dataclasses.replace(dmc.config, input_shape=(30, 30), grid_span=1.0, input_placement="grid",
+                            lambda_s=Schedule(0.0), gamma=0.95, q_init=100.0, plan=100, plan_every=200),
         "dmc:pendulum-swingup", "none (the report's dmc part)", 5, None, task_params=_PENDULUM_SCALING)
     cartpole = Preset(
         "dmc_cartpole", "beyond the paper: the DeepMind Control Suite's dmc:cartpole-swingup",

@@ -35,6 +35,7 @@ import numpy as np
 from somarm.learners import _kernels, grouping, groups, growing, interpolation
 from somarm.learners.base import ConfigBase, validate_common
 from somarm.learners.maps import MapLearner, grid_floats, shape_text
+from somarm.learners.planning import CellModel
 from somarm.learners.replay import Replay
 from somarm.learners.schedules import InverseDecay, Schedule
 from somarm.learners.som import grid_coordinates, grid_offsets, winners
@@ -47,12 +48,15 @@ __all__ = ["RESPONSES", "ACTION_INITS", "REPRESENTATION_SETTINGS", "SOMQConfig",
 #: The settings that choose how the state is seen and Q is held and learned beyond the paper's one map
 #: (``somarm.learners.groups``); at ``SOMQConfig``'s defaults they are the paper's model.
 REPRESENTATION_SETTINGS = ("input_groups", "k_nearest", "grow_every", "local_linear", "shared_slopes",
-                           "action_slopes", "action_factored", "action_gap", "n_step", "replay")
+                           "action_slopes", "action_factored", "action_gap", "n_step", "replay", "plan",
+                           "input_placement")
 
 #: The greedy responses: the paper's winning unit, or the interpolation of ``somarm.learners.interpolation``.
 RESPONSES = ("winner", "interpolated")
 #: How the action weights start: the paper's uniform random draw, or evenly over the action box.
 ACTION_INITS = ("random", "grid")
+#: How the input weights start: the paper's uniform random draw, or on a regular grid over the map's box.
+INPUT_PLACEMENTS = ("random", "grid")
 
 _F1 = InverseDecay(1000.0)
 
@@ -186,6 +190,21 @@ class SOMQConfig(ConfigBase):
     replay_capacity: int = 100_000
     """With ``replay``: the learned steps each trial keeps, the oldest overwritten first."""
 
+    input_placement: Literal["random", "grid"] = "random"
+    """Initial input weights: ``random`` (the paper's: uniform over the observation box, or ``input_init``) or
+    ``grid`` (each map's units on a regular grid over its dimensions' box or ``input_init``, unit i at the middle of its cell;
+    needs a map with one grid axis per dimension it sees). With ``lambda_s=0`` the grid's cells stay fixed."""
+
+    plan: int = 0
+    """Sweeps of value iteration over a model of the map's cells each ``plan_every`` steps
+    (``somarm.learners.planning``; Dyna, Sutton 1990): each trial counts, per pair of input unit and action
+    unit, its rewards and the input units it led to, and Q is set to the model's values; a pair never tried
+    keeps ``q_init``. 0 is the paper's model (no model). Needs one input map with ``k_nearest=1`` and the
+    one-step target; runs the grouped kernels."""
+
+    plan_every: int = 1000
+    """With ``plan``: steps between two solutions of the model."""
+
     SCHEDULES = ("alpha", "lambda_s", "lambda_a", "n_s", "n_a", "p", "epsilon")
 
     def __post_init__(self) -> None:
@@ -250,12 +269,37 @@ class SOMQConfig(ConfigBase):
         if self.local_linear and self.grow_every:
             raise ValueError("local_linear applies to maps of a fixed size: it needs grow_every=0, "
                              f"got grow_every={self.grow_every}")
+        if self.input_placement not in INPUT_PLACEMENTS:
+            raise ValueError(f"input_placement must be one of {', '.join(INPUT_PLACEMENTS)}, got {self.input_placement!r}")
+        for name, least in (("plan", 0), ("plan_every", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+                raise ValueError(f"{name} must be a whole number >= {least}, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        if self.plan:
+            self._check_plannable()
+
+    def _check_plannable(self) -> None:
+        """``plan`` models one map's cells with one-step targets: refuse what it cannot model (one line)."""
+        clashes = [f"{name}={value}" for name, value, ok in (
+            ("k_nearest", self.k_nearest, self.k_nearest == 1), ("n_step", self.n_step, self.n_step == 1),
+            ("replay", self.replay, self.replay == 0), ("grow_every", self.grow_every, self.grow_every == 0),
+            ("local_linear", self.local_linear, not self.local_linear),
+            ("action_factored", self.action_factored, not self.action_factored),
+            ("gamma", self.gamma, 0.0 < self.gamma < 1.0)) if not ok]
+        if ";" in self.input_groups:
+            clashes.insert(0, f"input_groups={self.input_groups}")
+        if clashes:
+            raise ValueError("plan models one input map's cells with one-step targets: it needs one input map, "
+                             "k_nearest=1, n_step=1, replay=0, grow_every=0, local_linear=false, action_factored=false "
+                             f"and 0 < gamma < 1, got {', '.join(clashes)}")
 
     @property
     def grouped(self) -> bool:
         """Whether this config runs the grouped, k-nearest maps (``somarm.learners.groups``), not the paper's one map."""
         return (self.input_groups != "all" or self.k_nearest != 1 or self.grow_every > 0 or self.local_linear
-                or self.action_factored or self.action_gap > 0.0 or self.n_step > 1 or self.replay > 0)
+                or self.action_factored or self.action_gap > 0.0 or self.n_step > 1 or self.replay > 0 or self.plan > 0
+                or self.input_placement == "grid")
 
     def slope_rows(self, action_dim: int) -> int:
         """Slope vectors per input unit with ``local_linear``: one per table column, one where shared, and one
@@ -348,6 +392,8 @@ class SOMQLearner(MapLearner):
             if config.replay:
                 n_floats += Replay.floats(config.replay_capacity, n_trials=n_trials, obs_dim=size, action_dim=action_dim)
                 n_floats += n_trials * (config.replay + 2 * n_maps * config.k_nearest + n_maps * n_s)
+            if config.plan:
+                n_floats += CellModel.floats(n_trials=n_trials, n_units=n_s, n_actions=n_a) + 2 * n_trials
             return (f"a somq learner with {n_maps} input map(s) of {shape_text(config.input_shape)} units, "
                     f"action_shape={shape_text(config.action_shape)} and {n_trials} trial(s)", 8.0 * n_floats)
         n_floats += n_trials * (n_s * obs_dim + n_a * action_dim + n_s * n_a)
@@ -429,6 +475,16 @@ class SOMQLearner(MapLearner):
         self._replayed_units = np.zeros_like(self._group_units[:self.n_trials * kept])
         self._replayed_phi = np.zeros_like(self._phi[:self.n_trials * kept])
         self._replayed_errors = np.zeros_like(self._errors[:self.n_trials * kept])  # replays add to no map's errors
+        # The model of the map's cells (none kept without plan), under the names it is saved by, and the
+        # nearest units of each step's next observation.
+        if cfg.plan and self._groups.shape[0] != 1:
+            raise ValueError(f"plan models one input map's cells: it needs one input map, got input_groups="
+                             f"{cfg.input_groups} ({self._groups.shape[0]} maps over {self.obs_dim} dimensions)")
+        self._model = CellModel(n_trials=self.n_trials, n_units=n_s if cfg.plan else 0, n_actions=n_a)
+        for name in CellModel.ARRAYS:
+            setattr(self, "_model_" + name, getattr(self._model, name))
+        self._next_units = np.zeros_like(self._group_units[:self.n_trials * bool(cfg.plan)])
+        self._next_phi = np.zeros_like(self._phi[:self.n_trials * bool(cfg.plan)])
         # The grouped kernel's per-trial discounts and mask (the paper's kernel takes gamma and every trial).
         self._discounts = np.zeros(self.n_trials if cfg.grouped else 0)
         self._all_trials = np.ones(self.n_trials if cfg.grouped else 0, dtype=np.bool_)
@@ -443,6 +499,14 @@ class SOMQLearner(MapLearner):
         n_s = self.input_grid.shape[0]
         for g, row in enumerate(self._groups):
             dims = row[row >= 0]
+            if self.config.input_placement == "grid":  # unit i at the middle of its cell of the grid over the box
+                shape = tuple(self.config.input_shape)
+                if len(shape) != dims.size:
+                    raise ValueError(f"input_placement=grid needs a map with one grid axis per dimension it sees: "
+                                     f"input_shape={shape_text(shape)} has {len(shape)}, the map sees {dims.size}")
+                middles = (self.input_grid[:, :dims.size] + 0.5) / np.array(shape, dtype=np.float64)
+                weights[g * n_s:(g + 1) * n_s, :dims.size] = low[dims] + (high[dims] - low[dims]) * middles
+                continue
             weights[g * n_s:(g + 1) * n_s, :dims.size] = low[dims] + (high[dims] - low[dims]) * rng.random((n_s, dims.size))
 
     @property
@@ -454,8 +518,10 @@ class SOMQLearner(MapLearner):
     # ``slopes``: each unit's local linear model (``local_linear`` only; a 1x1x1 placeholder otherwise).
     # ``_trail_*``: the steps that wait for their n-step target (``n_step`` > 1 only; empty otherwise).
     # ``_replay_*``: the learned steps kept to learn from again (``replay`` > 0 only; empty otherwise).
+    # ``_model_*``: the model of the map's cells (``plan`` > 0 only; empty otherwise).
     _STATE_ARRAYS = ("input_weights", "action_weights", "q", "_shapes", "_errors", "slopes") + tuple(
-        "_trail_" + name for name in Trail.ARRAYS) + tuple("_replay_" + name for name in Replay.ARRAYS)
+        "_trail_" + name for name in Trail.ARRAYS) + tuple("_replay_" + name for name in Replay.ARRAYS) + tuple(
+        "_model_" + name for name in CellModel.ARRAYS)
     # ``_shifted`` says, between act and learn, which trials' step 7 shifts (an interpolated greedy step).
     # ``_group_units`` and ``_phi``: each map's k nearest units and their weights (grouped maps only).
     # ``_replay_numbers``: the step's numbers that pick its replayed steps.
@@ -463,7 +529,8 @@ class SOMQLearner(MapLearner):
     # Files saved before these existed load with ``_shifted`` all False (nothing shifts: the winner
     # response) and the paper's one map (no groups).
     _OPTIONAL_ARRAYS = ("_shifted", "_group_units", "_phi", "_shapes", "_errors", "slopes", "_replay_numbers") + tuple(
-        "_trail_" + name for name in Trail.ARRAYS) + tuple("_replay_" + name for name in Replay.ARRAYS)
+        "_trail_" + name for name in Trail.ARRAYS) + tuple("_replay_" + name for name in Replay.ARRAYS) + tuple(
+        "_model_" + name for name in CellModel.ARRAYS)
 
     def _check_restored(self) -> None:
         trail, most = self._trail, self._trail.observations.shape[0] - 1
@@ -479,6 +546,9 @@ class SOMQLearner(MapLearner):
         if replay.count.size and not ((replay.count >= 0).all() and (
                 (replay.chosen >= 0) & (replay.chosen < n_actions)).all()):
             raise ValueError(f"_replay_count must be >= 0 and _replay_chosen must name action units 0 to {n_actions - 1}")
+        model = self._model
+        if model.active and ((model.tries < 0).any() or (model.led < 0).any()):
+            raise ValueError("_model_tries and _model_led count steps: they must be >= 0")
 
     def act(self, observations) -> np.ndarray:
         """Steps 1 to 5: an exploring action per trial (around the interpolated response if so set).
@@ -559,6 +629,8 @@ class SOMQLearner(MapLearner):
             self._grouped_learn(r, x_next, self._discounts, self._all_trials, self._observations, self._group_units,
                                 self._phi, self._units, self._actions, values)
             self._replay.push(self._all_trials, r, self._discounts, self._observations, self._units, self._actions, x_next)
+            if self._model.active:
+                self._plan_step(r, bootstrap, x_next)
         else:
             _kernels.learn_kernel(
                 r, x_next, bootstrap, self.config.gamma, self._observations, self._winners, self._units,
@@ -587,6 +659,17 @@ class SOMQLearner(MapLearner):
             self._replayed_errors if replayed else self._errors,
             not replayed and cfg.grow_every > 0 and (self.t + 1) % cfg.grow_every == 0, cfg.action_gap,
         )
+
+    def _plan_step(self, rewards: np.ndarray, bootstrap: np.ndarray, x_next: np.ndarray) -> None:
+        """Count the step in the model of the map's cells, and every ``plan_every`` steps solve it into Q
+        (``somarm.learners.planning``)."""
+        cfg = self.config
+        groups.features_kernel(x_next, self.input_weights, self._groups, self._shapes, 1, self._all_trials,
+                               self._next_units, self._next_phi)
+        self._model.push(self._all_trials, self._group_units[:, 0, 0], self._units, rewards, bootstrap,
+                         self._next_units[:, 0, 0])
+        if (self.t + 1) % cfg.plan_every == 0:
+            self._model.solve(self.q, gamma=cfg.gamma, q_init=cfg.q_init, sweeps=cfg.plan)
 
     def _learn_rounds(self, due: np.ndarray, bootstrap: np.ndarray, values) -> None:
         """Learn from the ``due`` oldest waiting steps of each trial, oldest first (``somarm.learners.trail``)."""

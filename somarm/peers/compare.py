@@ -149,8 +149,11 @@ class OurRunner:
         return learners.make("somq" if self.kind == "somq+" else self.kind, self.settings, **_bounds(task), seed=seed)
 
     def run(self, plan: Plan, seed: int, score: _Scorer, *, warm_up: bool = False):
-        """Train at ``seed``, scoring at every rung: ``(values, walls, settings)``."""
+        """Train at ``seed``, scoring at every rung: ``(values, walls, settings)``. Samples are the task's
+        own steps: with a suite task's ``action_repeat`` K each decision takes K, and a rung of N samples
+        trains N // K decisions."""
         task = plan.task(seed)
+        repeat = int(plan.params.get("action_repeat", 1))
         learner = self._make(task, seed)
         if warm_up:  # untimed: numba compiles SOM-Q's kernels on first use
             spare = self._make(task, seed)
@@ -159,7 +162,7 @@ class OurRunner:
         values, walls, wall, done = [], [], 0.0, 0
         for rung in self.rungs:
             start = time.perf_counter()
-            _train_ours(task, learner, rung - done)
+            _train_ours(task, learner, rung // repeat - done // repeat)
             wall += time.perf_counter() - start
             done = rung
             task.set_step(done)  # moving goals (four_goals): score in the phase reached
@@ -217,7 +220,7 @@ class PeerRunner:
         from somarm.peers.gym import to_task_actions
 
         torch.set_num_threads(1)
-        env, described = self._env(plan.config.task, plan.params)
+        env, described = self._env(plan.config.task, plan.params_for(self.kind))
         algorithm = {"td3": stable_baselines3.TD3, "sac": stable_baselines3.SAC}[self.kind]
         if self.gym_id:
             keywords, _, source = zoo.settings(self.kind, self.gym_id, env.action_space.shape[0])
@@ -261,8 +264,12 @@ class Plan:
     shares, and a runner per learner, in the order asked."""
 
     config: CompareConfig
-    params: dict[str, Any]
+    params: dict[str, Any]  #: somarm's learners' task parameters: the preset's own, then the run's
     runners: dict[str, Runner]
+    #: TD3's and SAC's task parameters: the run's alone (what a preset asks of its task, such as dm_control's
+    #: ``action_repeat`` or ``angles``, is its learner's choice, not the task's), completed the same way
+    #: (None: ``params``, where the preset asks nothing).
+    peer_params: dict[str, Any] | None = None
 
     @property
     def seeds(self) -> list[int]:
@@ -272,9 +279,19 @@ class Plan:
         """The task of one seed (one trial)."""
         return tasks.make(self.config.task, seed=seed, **self.params)
 
-    def scorer(self) -> _Scorer:
-        """A scorer of greedy policies (each unit its own: a moving goal's phase is the scorer's state)."""
-        return _Scorer(self.config, self.params)
+    def params_for(self, kind: str | None) -> dict[str, Any]:
+        """The task parameters learner ``kind`` trains and is scored with (None: the task as the run gives it,
+        TD3's and SAC's)."""
+        if self.peer_params is None or (kind is not None and kind not in PEERS):
+            return self.params
+        return self.peer_params
+
+    def scorer(self, kind: str | None = None) -> _Scorer:
+        """A scorer of learner ``kind``'s greedy policies (None: on the task as the run gives it); each unit its
+        own (a moving goal's phase is the scorer's state). Every learner's episodes start from the same reset
+        seeds, so a preset's ``action_repeat`` or ``angles`` changes how its learner acts and sees, not the
+        episodes it is scored on."""
+        return _Scorer(self.config, self.params_for(kind))
 
     def fingerprint(self, kind: str, seed: int, score: _Scorer, described: dict[str, Any] | None = None) -> dict:
         """What one learner's training and scores at one seed depend on: a seed's record is reused only
@@ -283,7 +300,7 @@ class Plan:
         config = self.config
         scored = {"episodes": config.episodes} if score.episodic else {"observations": config.observations}
         return json.loads(json.dumps({
-            "task": config.task, "task_params": runner.fingerprint_params(self.params), "learner": kind,
+            "task": config.task, "task_params": runner.fingerprint_params(self.params_for(kind)), "learner": kind,
             "seed": seed, "rungs": runner.rungs, **scored, "eval_seed": config.eval_seed,
             "settings": runner.described() if described is None else described,
             "somarm_version": __version__}, default=repr))
@@ -320,6 +337,8 @@ def make_plan(config: CompareConfig) -> Plan:
     preset_params = presets.task_params_of(record.preset, config.task) if record.preset else {}
     params = json.loads(_completed(config.task, json.dumps({**preset_params, **config.task_params}, sort_keys=True),
                                    config.seed))
+    peer_params = json.loads(_completed(config.task, json.dumps(config.task_params, sort_keys=True), config.seed)) \
+        if preset_params else None
     gym_id = gym_envs.env_id_of(config.task) if gym_envs.env_task(config.task) else None
     runners: dict[str, Runner] = {}
     task = tasks.make(config.task, seed=config.seed, **params)
@@ -333,7 +352,7 @@ def make_plan(config: CompareConfig) -> Plan:
             runners[kind]._make(task, config.seed)
         except ValueError as exc:
             raise ValueError(f"{kind} cannot learn {config.task}: {exc}") from None
-    return Plan(config, params, runners)
+    return Plan(config, params, runners, peer_params)
 
 
 #: The most units (learners times seeds) one comparison holds: a seed record each.
@@ -541,7 +560,7 @@ def run_unit(plan: Plan, kind: str, seed: int):
     its own); the scores do not depend on it."""
     warm_up = kind not in _WARMED
     _WARMED.add(kind)
-    return plan.runners[kind].run(plan, seed, plan.scorer(), warm_up=warm_up)
+    return plan.runners[kind].run(plan, seed, plan.scorer(kind), warm_up=warm_up)
 
 
 def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, resume: bool = False,
@@ -582,6 +601,8 @@ def compare(config: CompareConfig | Plan, out: Path, *, progress: bool = True, r
         f"random_action_{score.metric}": score.random(config.eval_seed),
         "somarm_version": __version__, "complete": False, "learners": {},
     }
+    if plan.peer_params is not None:  # TD3 and SAC train and are scored on the task without the preset's own
+        result["peer_task_params"] = plan.peer_params
     result.update({"episodes": config.episodes} if score.episodic else {"observations": config.observations})
     make_folder(out / "seeds", within=out)
     found: dict[tuple[str, int], tuple] = {}  # (kind, seed) -> (values, walls, settings)

@@ -46,11 +46,11 @@ TARGET_TASKS = ("dmc:cartpole-balance", "dmc:pendulum-swingup", "dmc:point_mass-
 TARGET_SHARE = 0.9
 #: Each task's report seeds for somarm's learners: seeds no setting was scored on before the task's preset
 #: was fixed (the presets were tuned on seeds 100-199: docs/benchmarks/dmc/TUNING.md), 10-14, then the next
-#: unused ten for each later change of a preset or its run length (dmc_pendulum once: 20-24; dmc_cartpole
+#: unused ten for each later change of a preset or its run length (dmc_pendulum twice: 20-24, 30-34; dmc_cartpole
 #: once: 20-24; dmc_balance twice: 30-34; dmc_point_mass three times: 40-44). A preset changed again goes
 #: to the next unused ten.
 OUR_SEEDS = {"dmc:cartpole-balance": range(30, 35), "dmc:cartpole-swingup": range(20, 25),
-             "dmc:pendulum-swingup": range(20, 25), "dmc:point_mass-easy": range(40, 45)}
+             "dmc:pendulum-swingup": range(30, 35), "dmc:point_mass-easy": range(40, 45)}
 #: Every task's seeds: ``OUR_SEEDS`` (10-14 where not named) for SOM-Q and SOM-Q+, TD3 and SAC at seeds 0-4
 #: (SB3's defaults: no setting of theirs chosen on any seed).
 SEEDS: dict[str, ReportSeeds] = {task: ReportSeeds(OUR_SEEDS.get(task, range(10, 15)), range(0, 5)) for task in TASKS}
@@ -84,10 +84,14 @@ REPLAYED = {"dmc:pendulum-swingup": (
 
 
 def budgets(ctx: Context, task: str) -> tuple[int, int]:
-    """somarm's learners' samples (the preset's run length: ``tasks.record(task).n_steps``) and TD3's and SAC's."""
+    """somarm's learners' samples (the preset's run length, ``tasks.record(task).n_steps`` decisions, each the
+    suite's ``action_repeat`` steps where the preset asks for it) and TD3's and SAC's."""
     from somarm import tasks
+    from somarm.learners import presets
 
-    return ctx.pick(tasks.record(task).n_steps, 400), ctx.pick(PEER_SAMPLES, 300)
+    record = tasks.record(task)
+    repeat = int(presets.task_params_of(record.preset, task).get("action_repeat", 1))
+    return ctx.pick(record.n_steps * repeat, 400), ctx.pick(PEER_SAMPLES, 300)
 
 
 def _folder(ctx: Context, task: str) -> Path:

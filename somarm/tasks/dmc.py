@@ -13,7 +13,11 @@ Gymnasium task, ``SOMQ`` and Stable-Baselines3 all step the suite's own physics:
 - the keywords are the suite task's own: ``time_limit`` (seconds) and ``random`` (the seed of the
   task's random state before the first seeded reset), and ``action_repeat`` (K, default 1): each action
   is held for K of the suite's control steps and their rewards summed, so a 1,000-step episode is
-  ceil(1000 / K) decisions with the same 0-1000 return; the suite's limit ends it, on a shorter last hold.
+  ceil(1000 / K) decisions with the same 0-1000 return; the suite's limit ends it, on a shorter last hold;
+  and ``angles`` (pairs ``[[c, s], ...]`` of the flattened observation's indices): each pair, an angle's
+  cosine and sine as the suite gives orientations, is seen as the angle itself, ``atan2(s, c)`` in
+  ``[-pi, pi]``, in the cosine's place (the sine's place is dropped), so that a map over it spreads its
+  units evenly round the circle (the pendulum's ``[[0, 1]]``: 0 upright, +-pi hanging down).
 
 Importing this module needs Gymnasium (the ``gym`` extra; dm_control is a core dependency):
 ``somarm.tasks`` imports it only when a ``dmc:`` task is named.
@@ -121,6 +125,26 @@ def _check_action_repeat(action_repeat: Any) -> int:
     return int(action_repeat)
 
 
+def _check_angles(angles: Any, size: int) -> tuple[tuple[int, int], ...]:
+    """``angles`` as pairs of distinct indices below ``size``, each index in one pair at most (one-line errors)."""
+    if angles is None:
+        return ()
+    allowed = (f"angles takes pairs [[cosine index, sine index], ...] of distinct indices 0 to {size - 1} of the "
+               f"flattened observation, each index in one pair at most, got {angles!r}")
+    if not isinstance(angles, (list, tuple)):
+        raise ValueError(allowed)
+    pairs = []
+    for pair in angles:
+        if not isinstance(pair, (list, tuple)) or len(pair) != 2 or any(
+                isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < size for i in pair):
+            raise ValueError(allowed)
+        pairs.append((int(pair[0]), int(pair[1])))
+    named = [i for pair in pairs for i in pair]
+    if len(set(named)) != len(named):
+        raise ValueError(allowed)
+    return tuple(pairs)
+
+
 def _check_random(random: Any) -> int | None:
     if random is None:
         return None
@@ -137,6 +161,7 @@ class SuiteEnv(gymnasium.Env):
       time_limit: the episode's length in seconds (None: the suite's own for the task).
       random: the seed of the task's random state until the first seeded ``reset``.
       action_repeat: the suite's control steps each action is held for, their rewards summed.
+      angles: pairs ``[[c, s], ...]`` of the flattened observation's indices seen as ``atan2(s, c)``.
 
     Raises:
       ValueError: an unknown domain or task, an unbounded action spec, or a bad keyword (one line).
@@ -145,7 +170,7 @@ class SuiteEnv(gymnasium.Env):
     metadata = {"render_modes": []}
 
     def __init__(self, domain: str, task: str, *, time_limit: float | None = None, random: int | None = None,
-                 action_repeat: int = 1):
+                 action_repeat: int = 1, angles: Any = None):
         split_name(f"{domain}-{task}")
         self.action_repeat = _check_action_repeat(action_repeat)
         kwargs: dict[str, Any] = {"random": _check_random(random)}
@@ -159,7 +184,11 @@ class SuiteEnv(gymnasium.Env):
                              "action map needs finite bounds")
         self.keys = observation_keys(self.environment.observation_spec())
         size = sum(n for _, n in self.keys)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float64)
+        self.angles = _check_angles(angles, size)  #: the (cosine, sine) index pairs seen as angles
+        self._kept = np.array([i for i in range(size) if i not in {s for _, s in self.angles}], dtype=np.int64)
+        low = np.full(size, -np.inf)
+        low[[c for c, _ in self.angles]] = -np.pi
+        self.observation_space = spaces.Box(low[self._kept], -low[self._kept], (self._kept.size,), np.float64)
         self.action_space = spaces.Box(np.asarray(action_spec.minimum, dtype=np.float64).reshape(-1),
                                        np.asarray(action_spec.maximum, dtype=np.float64).reshape(-1),
                                        dtype=np.float64)
@@ -195,7 +224,14 @@ class SuiteEnv(gymnasium.Env):
         if seed is not None:
             self.environment.task.random.seed(int(self.np_random.integers(2**32)))
         step = self.environment.reset()
-        return flatten(step.observation), {}
+        return self._seen(step.observation), {}
+
+    def _seen(self, observation) -> np.ndarray:
+        """The flattened observation with each ``angles`` pair seen as its angle."""
+        flat = flatten(observation)
+        for c, s in self.angles:
+            flat[c] = np.arctan2(flat[s], flat[c])
+        return flat[self._kept] if self.angles else flat
 
     def step(self, action):
         action = np.asarray(action, dtype=np.float64)
@@ -208,7 +244,7 @@ class SuiteEnv(gymnasium.Env):
             reward += float(step.reward or 0.0)
         terminated = bool(step.last() and step.discount == 0.0)
         truncated = bool(step.last() and not terminated)
-        return flatten(step.observation), reward, terminated, truncated, {}
+        return self._seen(step.observation), reward, terminated, truncated, {}
 
     def close(self) -> None:
         self.environment.close()

@@ -1,4 +1,5 @@
-"""Shared by the learner tests (not collected): bounds, a small annealing config, the circle arc, a driver of episodes, the bytes a learner holds."""
+"""Shared by the learner tests (not collected): bounds, a small annealing config, the circle arc, a driver of episodes, a
+chain paid at its end, the bytes a learner holds."""
 
 import numpy as np
 
@@ -58,3 +59,23 @@ def held_bytes(learner) -> int:
     """Bytes of the arrays a learner holds, each counted once (the Motoric Map's action grid is its input grid)."""
     arrays = {id(value): value for value in vars(learner).values() if isinstance(value, np.ndarray)}
     return sum(value.nbytes for value in arrays.values())
+
+
+def chain_start_values(changes: dict, steps: int, n_trials: int = 8) -> np.ndarray:
+    """A chain of 10 cells over [0, 1] walked from middle to middle (left, stay, right), paid 1 only on reaching the
+    last cell (terminal), 100 steps an episode from the first cell; 10 input units fixed on the cells, so Q is a
+    table; ``changes`` to the learner's settings (``replay``, ``plan``). Returns each trial's learned value of the
+    first cell over its true value gamma^8."""
+    config = SOMQConfig(input_shape=(10,), action_shape=(3,), action_init="grid", alpha=Schedule(0.5),
+                        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
+                        p=Schedule(0.3), epsilon=Schedule(0.0), gamma=0.9, input_groups="0", **changes)
+    learner = SOMQLearner(config, n_trials=n_trials, seed=1, observation_low=[0.0], observation_high=[1.0],
+                          action_low=[-1.0], action_high=[1.0])
+    learner.input_weights[:, :, 0] = np.linspace(0.05, 0.95, 10)
+    x = np.full((n_trials, 1), 0.05)
+    for t in range(1, steps + 1):
+        nxt = np.clip(x + 0.1 * np.round(learner.act(x)), 0.05, 0.95)  # from cell middle to cell middle
+        goal = nxt[:, 0] >= 0.95 - 1e-9  # the last cell (nine tenths added to 0.05 may land a rounding below 0.95)
+        learner.learn(goal.astype(float), nxt, goal)
+        x = np.where((goal | (t % 100 == 0))[:, None], 0.05, nxt)
+    return learner.q[:, 0].max(axis=1) / 0.9 ** 8

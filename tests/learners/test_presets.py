@@ -192,12 +192,16 @@ def test_the_point_mass_preset_maps_each_axis_with_n_step_advantage_targets_over
     assert tasks.record("dmc:point_mass-easy").n_steps == 600_000
 
 
-def test_the_pendulum_preset_spans_the_circle_and_the_whole_torque_box_with_n_step_advantage_targets():
+def test_the_pendulum_preset_plans_over_a_fixed_grid_of_angle_and_velocity_deciding_every_tenth_of_a_second():
     base, swing = presets.get("dmc").to_dict(), presets.get("dmc_pendulum").to_dict()
-    assert {key for key in base if base[key] != swing[key]} == {"input_shape", "grid_span", "n_step", "action_gap"}
-    assert (swing["grid_span"], swing["n_step"], swing["action_gap"]) == (1.0, 30, 0.5)
-    ranges = presets.task_params_of("dmc_pendulum", "dmc:pendulum-swingup")["observation_ranges"]
-    assert ranges == {"0": [-1.0, 1.0], "1": [-1.0, 1.0], "2": [-10.0, 10.0]}
+    assert {key for key in base if base[key] != swing[key]} == {
+        "input_shape", "grid_span", "input_placement", "lambda_s", "gamma", "q_init", "plan", "plan_every"}
+    assert (swing["input_shape"], swing["input_placement"], swing["lambda_s"]["scale"]) == ([30, 30], "grid", 0.0)
+    assert (swing["grid_span"], swing["plan"], swing["plan_every"], swing["n_step"]) == (1.0, 100, 200, 1)
+    asked = presets.task_params_of("dmc_pendulum", "dmc:pendulum-swingup")
+    assert asked == {"angles": [[0, 1]], "action_repeat": 5, "observation_ranges": {"1": [-10.0, 10.0]}}
+    # untried pairs start above any value a pair can have: at most 5 paid steps a decision, forever
+    assert swing["q_init"] >= asked["action_repeat"] / (1.0 - swing["gamma"]) - 1e-9
     assert tasks.record("dmc:pendulum-swingup").preset == "dmc_pendulum"
 
 

@@ -3,13 +3,10 @@ that a rare reward's value spreads back sooner with it."""
 
 import numpy as np
 import pytest
-from somq_cases import BOX4, batch_and_alone, drive_episodes, held_bytes, small_config
+from somq_cases import BOX4, batch_and_alone, chain_start_values, drive_episodes, held_bytes, small_config
 
 from somarm.learners.replay import Replay
-from somarm.learners.schedules import Schedule
 from somarm.learners.somq import SOMQConfig, SOMQLearner, row_width
-
-BOX1 = dict(observation_low=[0.0], observation_high=[1.0], action_low=[-1.0], action_high=[1.0])
 
 
 def _push(replay, returns, active=(True, True)):
@@ -78,26 +75,8 @@ def test_save_and_load_between_act_and_learn_continue_the_replays_exactly(tmp_pa
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
 
 
-def _chain(replay: int, steps: int, n_trials: int = 8) -> np.ndarray:
-    """A chain of 10 cells over [0, 1] walked in steps of a tenth (left, stay, right), paid 1 only on reaching the
-    last cell (terminal), 100 steps an episode from the first cell; 10 input units fixed on the cells, so Q is a
-    table. Returns each trial's learned value of the first cell over its true value gamma^8."""
-    config = SOMQConfig(input_shape=(10,), action_shape=(3,), action_init="grid", alpha=Schedule(0.5),
-                        lambda_s=Schedule(0.0), lambda_a=Schedule(0.0), n_s=Schedule(0.0), n_a=Schedule(0.0),
-                        p=Schedule(0.3), epsilon=Schedule(0.0), gamma=0.9, replay=replay, input_groups="0")
-    learner = SOMQLearner(config, n_trials=n_trials, seed=1, **BOX1)
-    learner.input_weights[:, :, 0] = np.linspace(0.05, 0.95, 10)
-    x = np.full((n_trials, 1), 0.05)
-    for t in range(1, steps + 1):
-        nxt = np.clip(x + 0.1 * np.round(learner.act(x)), 0.0, 1.0)
-        goal = nxt[:, 0] >= 0.95
-        learner.learn(goal.astype(float), nxt, goal)
-        x = np.where((goal | (t % 100 == 0))[:, None], 0.05, nxt)
-    return learner.q[:, 0].max(axis=1) / 0.9 ** 8
-
-
 def test_replay_spreads_a_rare_rewards_value_back_to_the_start_sooner():
-    with_replay, without = _chain(4, 600), _chain(0, 600)
+    with_replay, without = chain_start_values({"replay": 4}, 600), chain_start_values({}, 600)
     assert (with_replay >= 0.8).all(), with_replay  # every trial knows the start's value within a fifth
     assert (without >= 0.8).sum() <= 4, without  # learning each step once: half the trials at most
 

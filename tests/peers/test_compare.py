@@ -402,3 +402,22 @@ def test_a_record_lacking_a_setting_at_its_default_is_kept_and_one_lacking_anoth
     path.write_text(json.dumps(record))
     assert main(argv) == 0
     assert "was made with other settings; training that seed again" in capsys.readouterr().err
+
+
+def test_a_presets_action_repeat_and_angles_are_its_learners_alone_and_its_samples_are_the_suites_steps(monkeypatch):
+    config = compare.CompareConfig(task="dmc:pendulum-swingup", learners=("somq", "sac"), samples=1000,
+                                   peer_samples=200, seeds=1, seed=3, episodes=1)
+    plan = compare.make_plan(config)
+    ours, theirs = plan.params_for("somq"), plan.params_for("sac")
+    assert ours["action_repeat"] == 5 and ours["angles"] == [[0, 1]] and len(ours["observation_low"]) == 2
+    assert "action_repeat" not in theirs and "angles" not in theirs and len(theirs["observation_low"]) == 3
+    assert plan.scorer("sac").task.scale_low.size == 3 and plan.scorer("somq").task.scale_low.size == 2
+    env, _ = plan.runners["sac"]._env(config.task, theirs)
+    assert env.unwrapped.action_repeat == 1 and env.observation_space.shape == (3,)
+    env.close()
+    # the peers' records keep their fingerprint: only what the run itself sets reaches them
+    assert plan.fingerprint("sac", 0, plan.scorer(), {})["task_params"] == {}
+    trained = []
+    monkeypatch.setattr(compare, "_train_ours", lambda task, learner, steps: trained.append(steps))
+    plan.runners["somq"].run(plan, 3, plan.scorer("somq"))
+    assert plan.runners["somq"].rungs == [100, 200, 500, 1000] and trained == [20, 20, 60, 100]  # 5 steps a decision

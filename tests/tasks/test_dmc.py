@@ -71,6 +71,25 @@ def test_a_repeated_action_is_held_for_k_suite_steps_its_rewards_summed_within_t
     assert 0.0 < sum(rewards) <= plain.episode_steps
 
 
+def test_angles_see_each_cosine_and_sine_pair_as_its_angle_of_the_same_physics():
+    seen, plain = dmc.SuiteEnv("cartpole", "swingup", angles=[[1, 2]]), dmc.SuiteEnv("cartpole", "swingup")
+    assert seen.observation_space.shape == (4,) and plain.observation_space.shape == (5,)
+    np.testing.assert_array_equal(seen.observation_space.low, [-np.inf, -np.pi, -np.inf, -np.inf])
+    np.testing.assert_array_equal(seen.observation_space.high, [np.inf, np.pi, np.inf, np.inf])
+    pairs = [(seen.reset(seed=3)[0], plain.reset(seed=3)[0])]
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        action = _actions(rng, plain, 1)[0]
+        pairs.append((seen.step(action)[0], plain.step(action)[0]))
+    for angle, flat in pairs:  # the cart's position, then the pole's angle, then the velocities
+        np.testing.assert_array_equal(angle[[0, 2, 3]], flat[[0, 3, 4]])
+        np.testing.assert_allclose([np.cos(angle[1]), np.sin(angle[1])], flat[1:3], atol=1e-12)
+    upright = dmc.SuiteEnv("pendulum", "swingup", angles=[[0, 1]])
+    upright.physics.named.data.qpos["hinge"] = 0.3
+    upright.physics.forward()
+    assert upright._seen(upright.environment.task.get_observation(upright.physics))[0] == pytest.approx(0.3)
+
+
 def test_the_same_seed_gives_the_same_episode_and_another_seed_another():
     def episode(seed):
         env = dmc.SuiteEnv("point_mass", "easy")
@@ -110,7 +129,9 @@ def test_an_unknown_domain_or_task_is_refused_in_one_line_naming_what_there_is(n
                                          ({"time_limit": float("nan")}, "time_limit"), ({"random": -1}, "random"),
                                          ({"random": 1.5}, "random"), ({"action_repeat": 0}, "action_repeat"),
                                          ({"action_repeat": 2.5}, "action_repeat"),
-                                         ({"action_repeat": True}, "action_repeat")])
+                                         ({"action_repeat": True}, "action_repeat"), ({"angles": [[0, 0]]}, "angles"),
+                                         ({"angles": [[0, 9]]}, "angles"), ({"angles": [0, 1]}, "angles"),
+                                         ({"angles": [[0, 1], [1, 2]]}, "angles"), ({"angles": "0,1"}, "angles")])
 def test_bad_keywords_are_refused_naming_the_key(kwargs, key):
     with pytest.raises(ValueError, match=f"^{key} takes"):
         dmc.SuiteEnv("reacher", "easy", **kwargs)
