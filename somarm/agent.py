@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from somarm import run, tasks
-from somarm.agent_env import bounds_of, task_name, task_on
+from somarm.agent_env import bounds_of, check_preset_view, task_name, task_on
 from somarm.io import read_json
 from somarm.protocols import BatchedTask, Learner
 from somarm.run import RunConfig
@@ -151,7 +151,8 @@ class SOMQ:
     MountainCarContinuous-v0 200,000   about 27; the mean return passes 90 after 100,000 (13 s)
     InvertedPendulum-v5      400,000   about 39
     Reacher-v5               200,000   about 101; the mean return passes -6 after 100,000 (52 s)
-    dmc:DOMAIN-TASK          100,000   13 to 56 (the six suite tasks with a preset)
+    dmc:DOMAIN-TASK          100,000   13 to 56 (the six suite tasks with a preset; pendulum-swingup 100,000
+                                       decisions of 5 suite steps, about 60 s)
     ======================== ========= =============================================================
 
     Args:
@@ -172,8 +173,9 @@ class SOMQ:
 
     Raises:
       ValueError: an unknown environment, a policy other than ``"MlpPolicy"``, a ``verbose`` other
-        than 0, 1 or 2, wrappers that change the action Box or the observation's shape, or a bad
-        setting (one line); ``MissingExtra`` (an ``ImportError`` as well) where Gymnasium is not
+        than 0, 1 or 2, wrappers that change the action Box or the observation's shape, an environment
+        made without the keywords its preset sees the task through (``dmc_pendulum``: ``angles=[[0, 1]]``,
+        ``action_repeat=5``), or a bad setting (one line); ``MissingExtra`` (an ``ImportError`` as well) where Gymnasium is not
         installed.
     """
 
@@ -184,6 +186,8 @@ class SOMQ:
         if isinstance(verbose, bool) or verbose not in (0, 1, 2):
             raise ValueError(f"verbose must be 0, 1 or 2 (SB3's levels), got {verbose!r}")
         task, kwargs, given = task_name(env)
+        if given is not None:
+            check_preset_view(given, task, kwargs, preset)
         params = {**kwargs, **(env_kwargs or {})}
         if given is not None and "observation_low" not in params:
             params.update(bounds_of(given, task, params, seed))
@@ -360,6 +364,8 @@ class SOMQ:
         task, kwargs, given = task_name(env)
         if task != self.config.task:
             raise ValueError(f"set_env takes an environment of the model's task {self.config.task}, got {task}")
+        if given is not None:
+            check_preset_view(given, task, kwargs, self.config.preset)
         own = {key: self.config.task_params[key] for key in ("observation_low", "observation_high")
                if key in self.config.task_params}
         config = dataclasses.replace(self.config, task_params={**kwargs, **own})

@@ -67,6 +67,24 @@ def check_fits(env: Any, env_id: str, kwargs: dict[str, Any]) -> None:
                          "wrappers that keep it (its action map spans the environment's own Box)")
 
 
+def check_preset_view(env: Any, task: str, kwargs: dict[str, Any], preset: str | None) -> None:
+    """Refuse, in one line, an environment object made without the keywords its preset sees the task through
+    (``dmc_pendulum``'s ``angles`` and ``action_repeat``): the object is trained in as given, so it must be
+    made with them."""
+    from somarm.learners import presets
+    from somarm.tasks import gym_envs
+
+    name = preset or gym_envs.record_for(task).preset
+    asked = {k: v for k, v in presets.task_params_of(name, task).items()
+             if k not in gym_envs.TASK_OWN_KEYS + gym_envs.SCALING_KEYS}
+    differ = {k: v for k, v in asked.items() if json.dumps(kwargs.get(k)) != json.dumps(v)}
+    if differ:
+        made = ", ".join(f"{k}={json.dumps(v)}" for k, v in asked.items())
+        raise ValueError(f"preset {name} sees {task} made with {made}; the environment given was made without "
+                         f"{', '.join(differ)}: make it with them (gymnasium.make({env.spec.id!r}, "
+                         f"{', '.join(f'{k}={v!r}' for k, v in asked.items())})), give SOMQ its id, or another preset")
+
+
 def bounds_of(env: Any, task: str, params: dict[str, Any], seed: int) -> dict[str, list[float]]:
     """The scaling bounds of an environment object whose wrappers change its observation Box from its
     id's (NormalizeObservation's is infinite): estimated on a copy of it, so ``config.json`` keeps them;

@@ -118,6 +118,23 @@ def test_a_wrapped_environment_is_trained_in_as_given():
     assert all(-10 < lo < hi < 10 for lo, hi in zip(low, high, strict=True))  # estimated on a copy of it
 
 
+def test_an_environment_made_without_the_view_its_preset_asks_for_is_refused_in_one_line_and_with_it_is_trained_in():
+    import somarm.tasks.dmc  # noqa: F401  (registers the suite's ids)
+
+    raw = gymnasium.make("somarm-dmc/pendulum-swingup-v0")
+    with pytest.raises(ValueError, match=r"preset dmc_pendulum sees dmc:pendulum-swingup made with angles=\[\[0, 1\]\], "
+                                         r"action_repeat=5; the environment given was made without angles, "
+                                         r"action_repeat: make it with them") as caught:
+        SOMQ(raw, seed=0)
+    assert "\n" not in str(caught.value)
+    seen = Monitor(gymnasium.make("somarm-dmc/pendulum-swingup-v0", angles=[[0, 1]], action_repeat=5))
+    model = SOMQ(seen, seed=0).learn(400)  # two episodes of 200 decisions
+    assert seen.get_episode_lengths() == [200, 200] and model.learner.input_weights.shape[-1] == 2
+    with pytest.raises(ValueError, match="the environment given was made without angles, action_repeat"):
+        model.set_env(raw)
+    assert SOMQ(raw, seed=0, preset="dmc").task.scale_low.size == 3  # a preset that asks nothing takes it as it is
+
+
 def test_load_and_set_env_take_an_environment_of_the_same_id(tmp_path):
     SOMQ("Pendulum-v1", seed=0).learn(100).save(tmp_path / "m")
     model = SOMQ.load(tmp_path / "m", env=gymnasium.make("Pendulum-v1", max_episode_steps=30))

@@ -68,9 +68,9 @@ DMC_PREFIX = "dmc:"
 #: The Gymnasium namespace of the suite's tasks (``somarm.tasks.dmc.NAMESPACE``, registered when that module loads).
 _DMC_NAMESPACE = "somarm-dmc/"
 #: Keys of ``--task-set`` that are the task's own (the rest go to ``gymnasium.make``).
-_OWN = ("observation_low", "observation_high", "evaluation_steps")
+_OWN = TASK_OWN_KEYS = ("observation_low", "observation_high", "evaluation_steps")
 #: Keys that say how the scaling bounds are found (``GymRecord.complete`` uses them up).
-_HOW = ("observation_ranges", "observation_widened")
+_HOW = SCALING_KEYS = ("observation_ranges", "observation_widened")
 #: Texts of ``--task-set`` that read as the float they spell (JSON knows only NaN and Infinity).
 _FLOAT_WORDS = ("nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 #: Random-action steps behind a bounds estimate, and the quantiles taken.
@@ -99,7 +99,7 @@ _DEFAULT_STEPS = 100_000
 DMC_BENCHMARKS: dict[str, tuple[str, int]] = {
     "dmc:cartpole-balance": ("dmc_balance", 1_000_000),
     "dmc:cartpole-swingup": ("dmc_cartpole", 300_000),
-    "dmc:pendulum-swingup": ("dmc_pendulum", 20_000),  # decisions of 5 suite steps (its preset's action_repeat)
+    "dmc:pendulum-swingup": ("dmc_pendulum", 100_000),  # decisions of 5 suite steps (its preset's action_repeat)
     **{name: ("dmc_2d", 100_000) for name in ("dmc:reacher-easy", "dmc:reacher-hard")},
     "dmc:point_mass-easy": ("dmc_point_mass", 600_000),
 }

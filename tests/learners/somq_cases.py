@@ -1,5 +1,5 @@
 """Shared by the learner tests (not collected): bounds, a small annealing config, the circle arc, a driver of episodes, a
-chain paid at its end, the bytes a learner holds."""
+save between act and learn, a chain paid at its end, the bytes a learner holds."""
 
 import numpy as np
 
@@ -79,3 +79,20 @@ def chain_start_values(changes: dict, steps: int, n_trials: int = 8) -> np.ndarr
         learner.learn(goal.astype(float), nxt, goal)
         x = np.where((goal | (t % 100 == 0))[:, None], 0.05, nxt)
     return learner.q[:, 0].max(axis=1) / 0.9 ** 8
+
+
+def saved_between_act_and_learn_goes_on_alike(config: SOMQConfig, drive, folder, names, *, before: int = 30,
+                                               after: int = 10, acting_on=None) -> None:
+    """Two trials (seed 4, ``BOX4``) driven ``before`` steps by ``drive(learner, steps)``, saved to ``folder``
+    between an ``act`` (on ``acting_on(learner)``, default 0.5 everywhere) and its ``learn``, and loaded; the
+    learner and its copy then learn the same step and ``after`` more: the arrays ``names`` must be equal."""
+    a = SOMQLearner(config, n_trials=2, seed=4, **BOX4)
+    drive(a, before)
+    a.act(np.full((2, 4), 0.5) if acting_on is None else acting_on(a))
+    a.save(folder / "l.npz")
+    b = SOMQLearner.load(folder / "l.npz")
+    for learner in (a, b):
+        learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
+        drive(learner, after)
+    for name in names:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from somq_cases import BOX4, batch_and_alone, small_config
+from somq_cases import BOX4, batch_and_alone, saved_between_act_and_learn_goes_on_alike, small_config
 
 from somarm.learners import grouping, groups
 from somarm.learners.schedules import InverseDecay, Schedule
@@ -120,16 +120,7 @@ def test_interpolated_response_moves_to_the_top_of_the_parabola():
 
 def test_save_and_load_continue_exactly(tmp_path):
     config = small_config((3,), True, 0.5).with_changes({"input_groups": "pairs", "k_nearest": 2})
-    a = SOMQLearner(config, n_trials=2, seed=4, **BOX4)
-    _drive(a, 30)
-    a.act(np.full((2, 4), 0.5))
-    a.save(tmp_path / "l.npz")
-    b = SOMQLearner.load(tmp_path / "l.npz")
-    for learner in (a, b):
-        learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
-        _drive(learner, 10)
-    for name in ("input_weights", "action_weights", "q"):
-        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    saved_between_act_and_learn_goes_on_alike(config, _drive, tmp_path, ("input_weights", "action_weights", "q"))
 
 
 def _planted_sum(input_groups, steps, seed):

@@ -5,7 +5,15 @@ sooner with it."""
 
 import numpy as np
 import pytest
-from somq_cases import BOX4, batch_and_alone, chain_start_values, drive_episodes, held_bytes, small_config
+from somq_cases import (
+    BOX4,
+    batch_and_alone,
+    chain_start_values,
+    drive_episodes,
+    held_bytes,
+    saved_between_act_and_learn_goes_on_alike,
+    small_config,
+)
 
 from somarm.learners.planning import CellModel
 from somarm.learners.somq import SOMQConfig, SOMQLearner
@@ -55,16 +63,8 @@ def test_a_trial_alone_equals_the_same_trial_in_a_batch_with_planning():
 
 
 def test_save_and_load_between_act_and_learn_continue_the_planning_exactly(tmp_path):
-    a = SOMQLearner(small_config((3, 3), True, 0.8).with_changes(PLAN), n_trials=2, seed=4, **BOX4)
-    drive_episodes(a, 30)
-    a.act(np.full((2, 4), 0.5))
-    a.save(tmp_path / "l.npz")
-    b = SOMQLearner.load(tmp_path / "l.npz")
-    for learner in (a, b):
-        learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
-        drive_episodes(learner, 20)
-    for name in ("q", "_model_tries", "_model_paid", "_model_led"):
-        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    saved_between_act_and_learn_goes_on_alike(small_config((3, 3), True, 0.8).with_changes(PLAN), drive_episodes,
+                                              tmp_path, ("q", "_model_tries", "_model_paid", "_model_led"), after=20)
 
 
 def test_a_learner_file_with_a_negative_count_is_refused_in_one_line(tmp_path):

@@ -3,7 +3,15 @@ that a rare reward's value spreads back sooner with it."""
 
 import numpy as np
 import pytest
-from somq_cases import BOX4, batch_and_alone, chain_start_values, drive_episodes, held_bytes, small_config
+from somq_cases import (
+    BOX4,
+    batch_and_alone,
+    chain_start_values,
+    drive_episodes,
+    held_bytes,
+    saved_between_act_and_learn_goes_on_alike,
+    small_config,
+)
 
 from somarm.learners.replay import Replay
 from somarm.learners.somq import SOMQConfig, SOMQLearner, row_width
@@ -63,16 +71,9 @@ def test_a_trial_alone_equals_the_same_trial_in_a_batch_with_replay(changes):
 
 def test_save_and_load_between_act_and_learn_continue_the_replays_exactly(tmp_path):
     config = small_config((3,), True, 0.8).with_changes({"replay": 3, "n_step": 2, "input_groups": "pairs"})
-    a = SOMQLearner(config, n_trials=2, seed=4, **BOX4)
-    drive_episodes(a, 30)
-    a.act(a._trail.last.copy())
-    a.save(tmp_path / "l.npz")
-    b = SOMQLearner.load(tmp_path / "l.npz")
-    for learner in (a, b):
-        learner.learn([1.0, 0.0], np.full((2, 4), 0.2), np.array([False, True]))
-        drive_episodes(learner, 10)
-    for name in ("q", "_replay_observations", "_replay_returns", "_replay_count"):
-        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    saved_between_act_and_learn_goes_on_alike(config, drive_episodes, tmp_path,
+                                              ("q", "_replay_observations", "_replay_returns", "_replay_count"),
+                                              acting_on=lambda learner: learner._trail.last.copy())
 
 
 def test_replay_spreads_a_rare_rewards_value_back_to_the_start_sooner():
