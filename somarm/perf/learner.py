@@ -45,9 +45,10 @@ CASES = (
 
 
 #: The input representations (``REPRESENTATION_SETTINGS``: ``input_groups``, ``k_nearest``, ``grow_every``,
-#: ``local_linear``, ``shared_slopes``, ``action_slopes``, ``action_factored`` and the learning rules ``action_gap`` and
-#: ``n_step``) at
-#: Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the reacher preset otherwise.
+#: ``local_linear``, ``shared_slopes``, ``action_slopes``, ``action_factored``, ``input_placement`` and the learning rules
+#: ``action_gap``, ``n_step`` and ``plan``) at Reacher-v5's size: 10 observed dimensions, a 3x3 grid of torques, the
+#: reacher preset otherwise (the planning row's map over the first two dimensions, its cost a step including
+#: a solution of its model every 200 steps).
 _ONE_MAP = {**paper_representation(), "input_shape": (20, 20)}
 _PAIRS = {**_ONE_MAP, "input_groups": "pairs", "input_shape": (10, 10)}
 REPRESENTATIONS = (
@@ -69,6 +70,8 @@ REPRESENTATIONS = (
     ("one 20x20 map, action_gap 0.5", {**_ONE_MAP, "action_gap": 0.5}),
     ("45 pairs, 3 nearest, shared, 3-step", {**_PAIRS, "k_nearest": 3, "local_linear": True, "shared_slopes": True,
                                              "n_step": 3}),
+    ("one 20x20 grid, 2 dims, plan 100/200", {**_ONE_MAP, "input_groups": "0,1", "input_placement": "grid",
+                                              "plan": 100, "plan_every": 200, "gamma": 0.95}),
 )
 
 
