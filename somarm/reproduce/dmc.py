@@ -395,7 +395,8 @@ def _seeds_of(data: dict, kind: str) -> str:
 
 def _standing(m: dict, replays: dict[str, tuple[float, float]]) -> list[str]:
     """Where SOM-Q stands and why: its better response's final return against random actions and against the
-    published SAC mean at ``PEER_SAMPLES`` steps (another implementation, so a yardstick, not a verdict), and
+    published SAC means (at ``PEER_SAMPLES`` steps and at 1,000,000 where published; another implementation, so a
+    yardstick, not a verdict), and
     where a ``REPLAYED`` controller was replayed (``replays``), what it earns on the same episodes beside every
     seed's return;
     then why each task ends where it does, from the tuning record and the yardsticks."""
@@ -404,9 +405,10 @@ def _standing(m: dict, replays: dict[str, tuple[float, float]]) -> list[str]:
     for task, data in m.items():
         kind = max(("somq", "somq+"), key=lambda k: data["final"][k][0])
         mean = data["final"][kind][0]
-        published = PUBLISHED.get(task, {}).get(PEER_SAMPLES)
-        against = (f"; the published SAC mean at {fmt(PEER_SAMPLES)} steps {np.mean(published):.1f}, of which it is "
-                   f"{mean / np.mean(published):.0%}" if published and np.mean(published) > 0 else
+        published = PUBLISHED.get(task, {})
+        shares = [f"at {fmt(steps)} steps {np.mean(values):.1f}, of which it is {mean / np.mean(values):.0%}"
+                  for steps, values in sorted(published.items()) if np.mean(values) > 0]
+        against = ("; the published SAC mean " + "; ".join(shares) if shares and PEER_SAMPLES in published else
                    "; no published SAC return at this budget")
         lines.append(f"- {task}: {NAMES[kind]} {mean:.1f}, random actions {data['random']:.1f}{against}")
         if task in replays:

@@ -151,5 +151,7 @@ def test_the_hold_is_replayed_on_the_comparisons_own_episodes_and_the_report_cou
                 if x.startswith("- dmc:pendulum-swingup"))
     assert "earns 99.1 on the same episodes (329.0 on the fifth of them the earlier rungs score), and 1 seed of 6 ends above it" in line
     assert "SB3 SAC 98.8, 1.0" in line and "Holding the pole only where" in line
+    # SOM-Q+'s 40.0 beside both published SAC means, at the peers' budget and at 1,000,000 steps
+    assert "the published SAC mean at 100000 steps 96.0, of which it is 42%; at 1000000 steps 353.6, of which it is 11%" in line
     assert any("and no seed ends above it" in x for x in dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": (100.0, 0.0)}))
     assert any("and 2 seeds of 6 end above it" in x for x in dmc._standing({"dmc:pendulum-swingup": data}, {"dmc:pendulum-swingup": (50.0, 0.0)}))
