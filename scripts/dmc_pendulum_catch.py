@@ -39,7 +39,7 @@ def paid_from_rest(env: SuiteEnv, policy, angle: float, steps: int) -> int:
     with physics.reset_context():
         physics.named.data.qpos["hinge"] = angle
         physics.named.data.qvel["hinge"] = 0.0
-    observation = env._seen(env.environment.task.get_observation(physics))
+    observation = env.observation_of(env.environment.task.get_observation(physics))
     paid = 0.0
     for _ in range(-(-steps // env.action_repeat)):
         observation, reward, *_ = env.step(np.atleast_1d(policy(observation)))
@@ -85,7 +85,7 @@ def main() -> None:
         print(json.dumps({**head, "angle_deg": deg, "learned_paid": mine, "hold_paid": hold}), flush=True)
     units = task.unscale(learner.input_weights[0])
     near = {deg: units_near_upright(units, deg) for deg in (10, 20, 45)}
-    rest = np.array([env._seen({"orientation": [np.cos(a), np.sin(a)], "velocity": [0.0]})
+    rest = np.array([env.observation_of({"orientation": [np.cos(a), np.sin(a)], "velocity": [0.0]})
                      for deg in angles for a in np.radians([-deg, deg])])
     winners, _ = learner.greedy_units(task.scale(rest)[None])
     print(json.dumps({**head, "paid_training_steps": paid, "map_units": len(units), "units_near_upright": near,

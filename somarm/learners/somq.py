@@ -255,7 +255,7 @@ class SOMQConfig(ConfigBase):
         object.__setattr__(self, "n_step", int(self.n_step))
         if self.n_step > 1 and self.gamma == 0.0:
             raise ValueError(f"n_step={self.n_step} looks ahead through later rewards: it needs gamma > 0, got gamma=0")
-        for name, least in (("replay", 0), ("replay_capacity", 1)):
+        for name, least in (("replay", 0), ("replay_capacity", 1), ("plan", 0), ("plan_every", 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
                 raise ValueError(f"{name} must be a whole number >= {least}, got {value!r}")
@@ -271,11 +271,6 @@ class SOMQConfig(ConfigBase):
                              f"got grow_every={self.grow_every}")
         if self.input_placement not in INPUT_PLACEMENTS:
             raise ValueError(f"input_placement must be one of {', '.join(INPUT_PLACEMENTS)}, got {self.input_placement!r}")
-        for name, least in (("plan", 0), ("plan_every", 1)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-                raise ValueError(f"{name} must be a whole number >= {least}, got {value!r}")
-            object.__setattr__(self, name, int(value))
         if self.plan:
             self._check_plannable()
 

@@ -30,7 +30,7 @@ from somarm.io import atomic_write_json, make_folder, read_json
 from somarm.run import evaluation
 from somarm.tasks import gym_envs
 
-__all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "Plan", "OurRunner", "PeerRunner", "make_plan", "ladder",
+__all__ = ["OURS", "PEERS", "LEARNERS", "CompareConfig", "Plan", "OurRunner", "PeerRunner", "make_plan", "ladder", "decisions",
            "check", "compare", "peers_missing", "peer_budget", "default_samples", "task_defaults", "run_unit",
            "engine_of_parts"]
 
@@ -149,11 +149,9 @@ class OurRunner:
         return learners.make("somq" if self.kind == "somq+" else self.kind, self.settings, **_bounds(task), seed=seed)
 
     def run(self, plan: Plan, seed: int, score: _Scorer, *, warm_up: bool = False):
-        """Train at ``seed``, scoring at every rung: ``(values, walls, settings)``. Samples are the task's
-        own steps: with a suite task's ``action_repeat`` K each decision takes K, and a rung of N samples
-        trains N // K decisions."""
+        """Train at ``seed``, scoring at every rung: ``(values, walls, settings)``; a rung's samples are the
+        task's own steps (``decisions``)."""
         task = plan.task(seed)
-        repeat = int(plan.params.get("action_repeat", 1))
         learner = self._make(task, seed)
         if warm_up:  # untimed: numba compiles SOM-Q's kernels on first use
             spare = self._make(task, seed)
@@ -162,7 +160,7 @@ class OurRunner:
         values, walls, wall, done = [], [], 0.0, 0
         for rung in self.rungs:
             start = time.perf_counter()
-            _train_ours(task, learner, rung // repeat - done // repeat)
+            _train_ours(task, learner, decisions(rung, plan.params) - decisions(done, plan.params))
             wall += time.perf_counter() - start
             done = rung
             task.set_step(done)  # moving goals (four_goals): score in the phase reached
@@ -241,7 +239,8 @@ class PeerRunner:
         values, walls, wall, done = [], [], 0.0, 0
         for rung in self.rungs:
             start = time.perf_counter()
-            model.learn(total_timesteps=rung - done, reset_num_timesteps=done == 0)
+            params = plan.params_for(self.kind)
+            model.learn(total_timesteps=decisions(rung, params) - decisions(done, params), reset_num_timesteps=done == 0)
             wall += time.perf_counter() - start
             done = rung
             values.append(score(predict, last=rung == self.rungs[-1]))
@@ -427,6 +426,12 @@ class _Scorer:
         rng = np.random.default_rng(seed)
         low, high = self.task.action_low, self.task.action_high
         return self(lambda x: rng.uniform(low, high, (len(x), low.size)))
+
+
+def decisions(samples: int, params: dict[str, Any]) -> int:
+    """The decisions ``samples`` of the task's own steps make where ``params`` hold a suite task's actions for
+    ``action_repeat`` K steps each: ``samples // K``, so that every learner's samples count the suite's steps."""
+    return samples // int(params.get("action_repeat", 1))
 
 
 def _train_ours(task, learner, steps: int) -> None:

@@ -224,10 +224,10 @@ class SuiteEnv(gymnasium.Env):
         if seed is not None:
             self.environment.task.random.seed(int(self.np_random.integers(2**32)))
         step = self.environment.reset()
-        return self._seen(step.observation), {}
+        return self.observation_of(step.observation), {}
 
-    def _seen(self, observation) -> np.ndarray:
-        """The flattened observation with each ``angles`` pair seen as its angle."""
+    def observation_of(self, observation) -> np.ndarray:
+        """A suite observation dict as this environment shows it: flattened, each ``angles`` pair seen as its angle."""
         flat = flatten(observation)
         for c, s in self.angles:
             flat[c] = np.arctan2(flat[s], flat[c])
@@ -244,7 +244,7 @@ class SuiteEnv(gymnasium.Env):
             reward += float(step.reward or 0.0)
         terminated = bool(step.last() and step.discount == 0.0)
         truncated = bool(step.last() and not terminated)
-        return self._seen(step.observation), reward, terminated, truncated, {}
+        return self.observation_of(step.observation), reward, terminated, truncated, {}
 
     def close(self) -> None:
         self.environment.close()

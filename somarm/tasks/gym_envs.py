@@ -68,9 +68,9 @@ DMC_PREFIX = "dmc:"
 #: The Gymnasium namespace of the suite's tasks (``somarm.tasks.dmc.NAMESPACE``, registered when that module loads).
 _DMC_NAMESPACE = "somarm-dmc/"
 #: Keys of ``--task-set`` that are the task's own (the rest go to ``gymnasium.make``).
-_OWN = TASK_OWN_KEYS = ("observation_low", "observation_high", "evaluation_steps")
+TASK_OWN_KEYS = ("observation_low", "observation_high", "evaluation_steps")
 #: Keys that say how the scaling bounds are found (``GymRecord.complete`` uses them up).
-_HOW = SCALING_KEYS = ("observation_ranges", "observation_widened")
+SCALING_KEYS = ("observation_ranges", "observation_widened")
 #: Texts of ``--task-set`` that read as the float they spell (JSON knows only NaN and Infinity).
 _FLOAT_WORDS = ("nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 #: Random-action steps behind a bounds estimate, and the quantiles taken.
@@ -683,8 +683,8 @@ class GymRecord(TaskRecord):
                 value = given[key]
                 if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                     raise ValueError(f"{key} of {self.name} takes a whole number of steps >= 1, got {value!r}")
-        how = {key: given.pop(key) for key in _HOW if key in given}
-        own = {key: given.pop(key) for key in _OWN if key in given}
+        how = {key: given.pop(key) for key in SCALING_KEYS if key in given}
+        own = {key: given.pop(key) for key in TASK_OWN_KEYS if key in given}
         for key in ("observation_low", "observation_high"):
             value = own.get(key)
             if value is not None and (not isinstance(value, (list, tuple)) or not all(
@@ -718,8 +718,8 @@ class GymRecord(TaskRecord):
         say how to find them (then used up), so the run's ``config.json`` keeps the bounds. Bounds given
         are kept as they are."""
         built = self.params_from(params)
-        how = {key: params[key] for key in _HOW if key in params}
-        rest = {key: value for key, value in params.items() if key not in _HOW}
+        how = {key: params[key] for key in SCALING_KEYS if key in params}
+        rest = {key: value for key, value in params.items() if key not in SCALING_KEYS}
         facts = describe(built.env_id, _kwargs_json(built))
         finite = np.isfinite(facts["observation_low"]).all() and np.isfinite(facts["observation_high"]).all()
         if built.observation_low is not None or (finite and not any(how.values())):

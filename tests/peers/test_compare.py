@@ -421,3 +421,13 @@ def test_a_presets_action_repeat_and_angles_are_its_learners_alone_and_its_sampl
     monkeypatch.setattr(compare, "_train_ours", lambda task, learner, steps: trained.append(steps))
     plan.runners["somq"].run(plan, 3, plan.scorer("somq"))
     assert plan.runners["somq"].rungs == [100, 200, 500, 1000] and trained == [20, 20, 60, 100]  # 5 steps a decision
+
+
+def test_every_learner_counts_the_suites_steps_whoever_holds_its_actions():
+    # the run's own action_repeat reaches TD3 and SAC too, and their samples are the suite's steps as well
+    config = compare.CompareConfig(task="dmc:cartpole-balance", learners=("somq", "sac"), samples=1000,
+                                   peer_samples=1000, seeds=1, episodes=1, task_params={"action_repeat": 4})
+    plan = compare.make_plan(config)
+    assert plan.params_for("sac")["action_repeat"] == 4 == plan.params_for("somq")["action_repeat"]
+    assert [compare.decisions(n, plan.params_for("sac")) for n in (100, 1000)] == [25, 250]
+    assert compare.decisions(1000, {}) == 1000

@@ -87,7 +87,7 @@ def test_angles_see_each_cosine_and_sine_pair_as_its_angle_of_the_same_physics()
     upright = dmc.SuiteEnv("pendulum", "swingup", angles=[[0, 1]])
     upright.physics.named.data.qpos["hinge"] = 0.3
     upright.physics.forward()
-    assert upright._seen(upright.environment.task.get_observation(upright.physics))[0] == pytest.approx(0.3)
+    assert upright.observation_of(upright.environment.task.get_observation(upright.physics))[0] == pytest.approx(0.3)
 
 
 def test_the_same_seed_gives_the_same_episode_and_another_seed_another():
